@@ -1,0 +1,125 @@
+#pragma once
+/// The case description: what a user writes in a case file (TOML or JSON), validated,
+/// before any discretization. Units are SI throughout (m, N, Pa).
+#include <array>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "fibra/core/types.hpp"
+
+namespace fibra {
+
+/// A St Venant–Kirchhoff material; axis 3 of the law is the fiber axis.
+struct MaterialSpec {
+  enum class Model { Isotropic, Transverse };
+  std::string name;
+  Model model = Model::Isotropic;
+  double young = 0;               ///< E (isotropic) or E_L, along the fiber [Pa]
+  double poisson = 0;             ///< nu (isotropic) or nu_LT (transverse strain / axial strain) [-]
+  double young_transverse = 0;    ///< E_T [Pa] (transverse only)
+  double shear_axial = 0;         ///< G_LT [Pa] (transverse only)
+  double poisson_transverse = 0;  ///< nu_TT in the plane of the section (transverse only)
+};
+
+/// Centroid path of a fiber in its reference (stress-free) configuration.
+struct PathSpec {
+  enum class Kind { Polyline, Arc, Helix };
+  Kind kind = Kind::Polyline;
+  std::vector<Vec3> points;  ///< polyline vertices (>= 2, consecutive distinct)
+  // Arc: circle of `radius` about `center`, in the plane normal to `axis`, from `start` to
+  // `start + angle` (radians), with the start point at center + radius * reference direction.
+  // Helix: about `axis` through `center`, `radius`, `pitch` (axial advance per turn), `turns`.
+  Vec3 center = Vec3::Zero();
+  Vec3 axis = Vec3::UnitZ();
+  double radius = 0;
+  double start_angle = 0;  ///< [rad]
+  double angle = 0;        ///< arc sweep [rad]
+  double pitch = 0;        ///< helix: axial advance per turn [m]
+  double turns = 0;        ///< helix: number of turns
+};
+
+/// One fiber: material, section, path and mesh.
+struct FiberSpec {
+  std::string name;
+  std::string material;
+  double radius = 0;          ///< circular section radius [m]; or the ellipse below
+  double semi_axis_1 = 0;     ///< ellipse semi-axis along g1 [m] (== radius for a circle)
+  double semi_axis_2 = 0;     ///< ellipse semi-axis along g2 [m]
+  std::optional<Vec3> section_direction;  ///< direction of g1 at the start (projected); default chosen
+  PathSpec path;
+  int elements = 0;           ///< number of quadratic 3-node elements
+};
+
+/// A node of a fiber: "first", "last", an index, or the nearest node to a length fraction.
+struct NodeRef {
+  std::string fiber;
+  enum class Kind { First, Last, Index, Fraction } kind = Kind::First;
+  Index index = 0;      ///< for Kind::Index
+  double fraction = 0;  ///< for Kind::Fraction, in [0, 1]
+  std::string label() const;  ///< "first", "last", "12", or "at0.5" (used in column names)
+};
+
+/// A [[fix]] entry: dofs of one node held at their reference values.
+struct FixSpec {
+  NodeRef node;
+  bool position = true;  ///< fix x0
+  bool sections = true;  ///< fix g1 and g2 (clamp)
+};
+
+/// A nodal load (force on x0 and/or axial moment on the section vectors), total value at the
+/// end of its step.
+struct LoadSpec {
+  NodeRef node;
+  Vec3 force = Vec3::Zero();   ///< [N]
+  Vec3 moment = Vec3::Zero();  ///< [N m]
+};
+
+/// A prescribed displacement of x0 (relative to the reference), total value at the end of its
+/// step; a component that is std::nullopt is left free.
+struct DisplacementSpec {
+  NodeRef node;
+  std::array<std::optional<double>, 3> value;
+};
+
+/// A load step: loads and displacements ramp linearly over the step from where the previous
+/// step ended; an entry not listed again keeps its last value.
+struct StepSpec {
+  std::string name;
+  int increments = 1;      ///< initial number of increments (the solver adapts)
+  int max_increments = 0;  ///< 0 = 100 * increments
+  std::vector<LoadSpec> loads;
+  std::vector<DisplacementSpec> displacements;
+};
+
+/// Nonlinear solver settings ([solver] table).
+struct SolverSpec {
+  double residual_tolerance = 1e-8;      ///< relative to the reference force
+  double displacement_tolerance = 1e-10;  ///< relative to the model size
+  int max_iterations = 25;               ///< Newton iterations per increment
+  int max_cuts = 12;                     ///< successive halvings of an increment
+  bool line_search = true;
+  std::string linear_solver = "cholmod";  ///< "cholmod" or "eigen"
+};
+
+/// Output settings ([output] table).
+struct OutputSpec {
+  int every = 1;               ///< write a .vtu every N converged increments (last always)
+  int tube_sides = 12;         ///< polygon sides of the tube view of each fiber
+};
+
+/// A whole case file.
+struct Case {
+  std::string file;   ///< path of the case file (for messages)
+  std::string name;   ///< file stem, used for the default output directory
+  std::string title;
+  std::vector<MaterialSpec> materials;
+  std::vector<FiberSpec> fibers;
+  std::vector<FixSpec> fixes;
+  std::vector<StepSpec> steps;
+  SolverSpec solver;
+  OutputSpec output;
+};
+
+}  // namespace fibra

@@ -1,0 +1,114 @@
+#include "fibra/model/model.hpp"
+
+#include <cmath>
+#include <fmt/format.h>
+
+#include "fibra/core/error.hpp"
+#include "fibra/model/fiber_path.hpp"
+
+namespace fibra {
+
+int Model::fiber_index(const std::string& name) const {
+  for (size_t i = 0; i < fibers.size(); ++i)
+    if (fibers[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+Index Model::node_index(const NodeRef& ref, const std::string& file, const std::string& key) const {
+  const int f = fiber_index(ref.fiber);
+  if (f < 0) throw InputError(file, key + ".fiber", fmt::format("no fiber named \"{}\"", ref.fiber));
+  const Fiber& fib = fibers[f];
+  switch (ref.kind) {
+    case NodeRef::Kind::First:
+      return fib.first_node;
+    case NodeRef::Kind::Last:
+      return fib.first_node + fib.num_nodes - 1;
+    case NodeRef::Kind::Index:
+      if (ref.index < 0 || ref.index >= fib.num_nodes)
+        throw InputError(file, key + ".node",
+                         fmt::format("node index {} out of range: fiber \"{}\" has nodes 0..{}", ref.index,
+                                     fib.name, fib.num_nodes - 1));
+      return fib.first_node + ref.index;
+    case NodeRef::Kind::Fraction: {
+      if (!(ref.fraction >= 0.0 && ref.fraction <= 1.0))
+        throw InputError(file, key + ".at", "expected a fraction of the length in [0, 1]");
+      // Nodes are equally spaced in reference arc length.
+      const Index local = std::llround(ref.fraction * static_cast<double>(fib.num_nodes - 1));
+      return fib.first_node + local;
+    }
+  }
+  return fib.first_node;
+}
+
+int add_fiber(Model& model, const FiberSpec& spec, int material) {
+  const Index n_el = spec.elements;
+  const Index n_nodes = 2 * n_el + 1;
+  Fiber fib;
+  fib.name = spec.name;
+  fib.material = material;
+  fib.first_node = model.num_nodes();
+  fib.num_nodes = n_nodes;
+  fib.first_element = static_cast<Index>(model.elements.size());
+  fib.num_elements = n_el;
+  fib.length = path_length(spec.path);
+
+  // Share sections between fibers of the same material and shape.
+  const double a = spec.semi_axis_1 > 0 ? spec.semi_axis_1 : spec.radius;
+  const double b = spec.semi_axis_2 > 0 ? spec.semi_axis_2 : spec.radius;
+  int sec = -1;
+  for (size_t i = 0; i < model.sections.size(); ++i) {
+    bool same_material = false;
+    for (const Fiber& other : model.fibers)
+      if (other.section == static_cast<int>(i) && other.material == material) same_material = true;
+    if (same_material && model.sections[i].a == a && model.sections[i].b == b) sec = static_cast<int>(i);
+  }
+  if (sec < 0) {
+    model.sections.push_back(make_section(model.materials[material], a, b));
+    sec = static_cast<int>(model.sections.size()) - 1;
+  }
+  fib.section = sec;
+
+  const std::vector<PathFrame> frames = sample_path(spec.path, static_cast<int>(n_nodes), spec.section_direction);
+  const Index base = model.reference.size();
+  model.reference.conservativeResize(base + kNodeDofs * n_nodes);
+  for (Index k = 0; k < n_nodes; ++k) {
+    model.reference.segment<3>(base + 9 * k) = frames[k].position;
+    model.reference.segment<3>(base + 9 * k + 3) = frames[k].g1;
+    model.reference.segment<3>(base + 9 * k + 6) = frames[k].g2;
+  }
+  const int fiber_id = static_cast<int>(model.fibers.size());
+  for (Index e = 0; e < n_el; ++e) {
+    BeamElement el;
+    el.first_dof = base + 9 * 2 * e;
+    el.section = sec;
+    el.fiber = fiber_id;
+    el.gauss = beam_reference(model.reference.data() + el.first_dof);
+    model.elements.push_back(el);
+  }
+  model.fibers.push_back(fib);
+  return fiber_id;
+}
+
+Model build_model(const Case& c) {
+  Model model;
+  model.materials = c.materials;
+  for (size_t i = 0; i < c.fibers.size(); ++i) {
+    const FiberSpec& spec = c.fibers[i];
+    int mat = -1;
+    for (size_t m = 0; m < c.materials.size(); ++m)
+      if (c.materials[m].name == spec.material) mat = static_cast<int>(m);
+    if (mat < 0)
+      throw InputError(c.file, fmt::format("fiber[{}].material", i),
+                       fmt::format("no material named \"{}\"", spec.material));
+    add_fiber(model, spec, mat);
+  }
+  Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
+  for (Index k = 0; k < model.num_nodes(); ++k) {
+    lo = lo.cwiseMin(model.reference.segment<3>(9 * k));
+    hi = hi.cwiseMax(model.reference.segment<3>(9 * k));
+  }
+  model.length_scale = model.num_nodes() > 0 ? std::max((hi - lo).norm(), 1e-30) : 1.0;
+  return model;
+}
+
+}  // namespace fibra

@@ -1,0 +1,50 @@
+// Eigen back end: simplicial LDL^T on the same upper CSC storage (fallback, no BLAS needed).
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <stdexcept>
+
+#include "fibra/solver/linear_solver.hpp"
+
+namespace fibra {
+
+std::unique_ptr<LinearSolver> make_cholmod_solver();
+
+namespace {
+
+class EigenSolver final : public LinearSolver {
+ public:
+  void analyze(const BlockPattern& pattern) override {
+    m_pattern = &pattern;
+    std::vector<double> zeros(pattern.nonzeros(), 0.0);
+    m_ldlt.analyzePattern(map(zeros));
+  }
+  FactorStatus factorize(const std::vector<double>& values, double shift) override {
+    m_ldlt.setShift(shift);
+    m_ldlt.factorize(map(values));
+    if (m_ldlt.info() != Eigen::Success) return FactorStatus::Failed;
+    // LL^T semantics: report non-positive pivots as not positive definite.
+    if ((m_ldlt.vectorD().array() <= 0.0).any()) return FactorStatus::NotPositiveDefinite;
+    return FactorStatus::Ok;
+  }
+  void solve(const VecX& b, VecX& x) override { x = m_ldlt.solve(b); }
+  std::string name() const override { return "eigen"; }
+
+ private:
+  using Map = Eigen::Map<const Eigen::SparseMatrix<double, Eigen::ColMajor, int>>;
+  Map map(const std::vector<double>& values) const {
+    return Map(m_pattern->rows(), m_pattern->rows(), m_pattern->nonzeros(), m_pattern->col_ptr().data(),
+               m_pattern->row_idx().data(), values.data());
+  }
+  const BlockPattern* m_pattern = nullptr;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double, Eigen::ColMajor, int>, Eigen::Upper> m_ldlt;
+};
+
+}  // namespace
+
+std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name) {
+  if (name == "cholmod") return make_cholmod_solver();
+  if (name == "eigen") return std::make_unique<EigenSolver>();
+  throw std::invalid_argument("unknown linear solver \"" + name + "\" (expected \"cholmod\" or \"eigen\")");
+}
+
+}  // namespace fibra

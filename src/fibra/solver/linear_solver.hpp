@@ -1,0 +1,35 @@
+#pragma once
+/// Sparse symmetric linear solver interface: analyse a pattern once, factor values (optionally
+/// shifted, A + beta I), solve. Implementations: CHOLMOD (supernodal, METIS) and Eigen.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fibra/core/types.hpp"
+#include "fibra/solver/block_pattern.hpp"
+
+namespace fibra {
+
+/// Outcome of a factorization.
+enum class FactorStatus { Ok, NotPositiveDefinite, Failed };
+
+/// Symmetric sparse direct solver working on a BlockPattern's upper CSC storage.
+class LinearSolver {
+ public:
+  virtual ~LinearSolver() = default;
+  /// Symbolic analysis (ordering, elimination tree); reused until the pattern changes.
+  virtual void analyze(const BlockPattern& pattern) = 0;
+  /// Numeric factorization of A + shift * I with A's upper-triangle values.
+  virtual FactorStatus factorize(const std::vector<double>& values, double shift) = 0;
+  /// Solves A x = b with the last factorization.
+  virtual void solve(const VecX& b, VecX& x) = 0;
+  /// Short name ("cholmod", "eigen").
+  virtual std::string name() const = 0;
+  /// Nonzeros in the factor after the last factorization (0 if unknown).
+  virtual double factor_nonzeros() const { return 0; }
+};
+
+/// Creates a solver by name ("cholmod" or "eigen"); throws std::invalid_argument otherwise.
+std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name);
+
+}  // namespace fibra

@@ -1,0 +1,54 @@
+#pragma once
+/// The discrete problem at one load level: total potential Pi(q) = W_beams(q) - loads, its
+/// gradient (f_int - f_ext) and Hessian, with eliminated (fixed or prescribed) dofs.
+#include <vector>
+
+#include "fibra/model/model.hpp"
+#include "fibra/solver/assembler.hpp"
+#include "fibra/solver/block_pattern.hpp"
+
+namespace fibra {
+
+/// A moment on a node's section vectors (see nodal_load.hpp).
+struct NodalMoment {
+  Index node = 0;
+  Vec3 moment = Vec3::Zero();  ///< [N m]
+};
+
+/// Accumulated wall times of the assembly [s].
+struct AssemblyTimes {
+  double assembly = 0;  ///< element and load evaluation + scatter
+  int evaluations = 0;  ///< calls to evaluate()
+};
+
+/// Energy terms of the model, assembled.
+class Problem {
+ public:
+  /// Builds stencils, colouring and the sparsity pattern of `model` (kept by reference).
+  explicit Problem(const Model& model);
+
+  const Model& model() const { return m_model; }                 ///< the model
+  const BlockPattern& pattern() const { return m_pattern; }      ///< matrix sparsity
+  std::vector<char>& fixed() { return m_fixed; }                 ///< per dof: 1 = eliminated
+  const std::vector<char>& fixed() const { return m_fixed; }     ///< per dof: 1 = eliminated
+  VecX& forces() { return m_forces; }                            ///< dead nodal forces (per dof) [N]
+  std::vector<NodalMoment>& moments() { return m_moments; }      ///< nodal moments
+  const AssemblyTimes& times() const { return m_times; }         ///< accumulated timings
+
+  /// Total potential energy at q; fills the gradient of Pi on every dof (f_int - f_ext) and
+  /// the Hessian values (free-free block; eliminated dofs get a unit-scaled diagonal).
+  double evaluate(const VecX& q, VecX* gradient, std::vector<double>* hessian);
+
+ private:
+  const Model& m_model;
+  StencilSet m_beams;
+  BlockPattern m_pattern;
+  std::vector<char> m_fixed;
+  VecX m_forces;
+  std::vector<NodalMoment> m_moments;
+  std::vector<double> m_energy_buffer;
+  std::vector<Index> m_diagonal;  // value index of each diagonal entry
+  AssemblyTimes m_times;
+};
+
+}  // namespace fibra
