@@ -1,5 +1,7 @@
 #include "fibra/solver/nodal_load.hpp"
 
+#include <Eigen/Geometry>
+
 namespace fibra {
 
 Vec6 moment_generalized_force(const Vec3& moment, const Vec3& rg1, const Vec3& rg2, const Vec3& g1,

@@ -1,0 +1,1107 @@
+#include "fibra/io/case_reader.hpp"
+
+#include <Eigen/Geometry>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <optional>
+#include <sstream>
+#include <string_view>
+#include <toml++/toml.h>
+#include <utility>
+#include <vector>
+
+#include "fibra/core/error.hpp"
+
+namespace fibra {
+namespace {
+
+// ------------------------------------------------------------------------------------------
+// A small generic document tree. TOML and JSON are both converted to it, so the schema is
+// checked once, in Reader below.
+
+/// One value of a parsed case file.
+struct Value {
+  enum class Type { Null, Boolean, Integer, Float, String, Array, Table, Other };
+  Type type = Type::Null;
+  bool boolean = false;
+  std::int64_t integer = 0;
+  double number = 0;
+  std::string text;               ///< String contents; for Other, a description ("a date")
+  std::vector<Value> items;       ///< Array elements, or Table values (parallel to keys)
+  std::vector<std::string> keys;  ///< Table keys, in file order for JSON
+  int line = 0;                   ///< source line (TOML only), 0 when unknown
+};
+
+/// The value stored under `key` in a Table, or nullptr.
+const Value* find(const Value& table, std::string_view key) {
+  for (std::size_t i = 0; i < table.keys.size(); ++i) {
+    if (table.keys[i] == key) return &table.items[i];
+  }
+  return nullptr;
+}
+
+/// Converts a toml++ node (recursively) to the generic tree.
+Value from_toml(const toml::node& node) {
+  Value value;
+  value.line = static_cast<int>(node.source().begin.line);
+  switch (node.type()) {
+    case toml::node_type::table:
+      value.type = Value::Type::Table;
+      for (auto&& [key, child] : *node.as_table()) {
+        value.keys.emplace_back(key.str());
+        value.items.push_back(from_toml(child));
+      }
+      break;
+    case toml::node_type::array:
+      value.type = Value::Type::Array;
+      for (auto&& child : *node.as_array()) value.items.push_back(from_toml(child));
+      break;
+    case toml::node_type::string:
+      value.type = Value::Type::String;
+      value.text = node.as_string()->get();
+      break;
+    case toml::node_type::integer:
+      value.type = Value::Type::Integer;
+      value.integer = node.as_integer()->get();
+      break;
+    case toml::node_type::floating_point:
+      value.type = Value::Type::Float;
+      value.number = node.as_floating_point()->get();
+      break;
+    case toml::node_type::boolean:
+      value.type = Value::Type::Boolean;
+      value.boolean = node.as_boolean()->get();
+      break;
+    case toml::node_type::date:
+      value.type = Value::Type::Other;
+      value.text = "a date";
+      break;
+    case toml::node_type::time:
+      value.type = Value::Type::Other;
+      value.text = "a time";
+      break;
+    case toml::node_type::date_time:
+      value.type = Value::Type::Other;
+      value.text = "a date-time";
+      break;
+    default:
+      value.type = Value::Type::Null;
+      break;
+  }
+  return value;
+}
+
+/// SAX handler building the generic tree from JSON; rejects duplicate keys.
+class JsonBuilder {
+ public:
+  using number_integer_t = nlohmann::json::number_integer_t;
+  using number_unsigned_t = nlohmann::json::number_unsigned_t;
+  using number_float_t = nlohmann::json::number_float_t;
+  using string_t = nlohmann::json::string_t;
+  using binary_t = nlohmann::json::binary_t;
+
+  bool null() { return add(Value{}); }
+  bool boolean(bool b) {
+    Value v;
+    v.type = Value::Type::Boolean;
+    v.boolean = b;
+    return add(std::move(v));
+  }
+  bool number_integer(number_integer_t i) {
+    Value v;
+    v.type = Value::Type::Integer;
+    v.integer = i;
+    return add(std::move(v));
+  }
+  bool number_unsigned(number_unsigned_t u) {
+    Value v;
+    if (u <= static_cast<number_unsigned_t>(INT64_MAX)) {
+      v.type = Value::Type::Integer;
+      v.integer = static_cast<std::int64_t>(u);
+    } else {
+      v.type = Value::Type::Float;
+      v.number = static_cast<double>(u);
+    }
+    return add(std::move(v));
+  }
+  bool number_float(number_float_t x, const string_t& /*text*/) {
+    Value v;
+    v.type = Value::Type::Float;
+    v.number = x;
+    return add(std::move(v));
+  }
+  bool string(string_t& s) {
+    Value v;
+    v.type = Value::Type::String;
+    v.text = s;
+    return add(std::move(v));
+  }
+  bool binary(binary_t& /*b*/) {
+    Value v;
+    v.type = Value::Type::Other;
+    v.text = "binary data";
+    return add(std::move(v));
+  }
+  bool start_object(std::size_t /*elements*/) {
+    Value v;
+    v.type = Value::Type::Table;
+    m_stack.push_back(Frame{std::move(v), next_path()});
+    return true;
+  }
+  bool end_object() { return end_container(); }
+  bool start_array(std::size_t /*elements*/) {
+    Value v;
+    v.type = Value::Type::Array;
+    m_stack.push_back(Frame{std::move(v), next_path()});
+    return true;
+  }
+  bool end_array() { return end_container(); }
+  bool key(string_t& k) {
+    Frame& frame = m_stack.back();
+    if (find(frame.value, k) != nullptr) {
+      m_error_key = frame.path.empty() ? k : frame.path + "." + k;
+      m_error = "duplicate key";
+      return false;
+    }
+    frame.value.keys.push_back(k);
+    return true;
+  }
+  bool parse_error(std::size_t /*position*/, const std::string& /*last_token*/,
+                   const nlohmann::json::exception& ex) {
+    std::string message = ex.what();
+    // Drop the "[json.exception.parse_error.101] " prefix.
+    if (auto end = message.find("] "); !message.empty() && message[0] == '[' &&
+                                       end != std::string::npos) {
+      message.erase(0, end + 2);
+    }
+    m_error_key = "(file)";
+    m_error = "JSON syntax error: " + message;
+    return false;
+  }
+
+  Value& root() { return m_root; }                        ///< the document
+  const std::string& error() const { return m_error; }    ///< why parsing stopped
+  const std::string& error_key() const { return m_error_key; }
+
+ private:
+  struct Frame {
+    Value value;
+    std::string path;
+  };
+
+  std::string next_path() const {
+    if (m_stack.empty()) return "";
+    const Frame& top = m_stack.back();
+    if (top.value.type == Value::Type::Table) {
+      const std::string& k = top.value.keys.back();
+      return top.path.empty() ? k : top.path + "." + k;
+    }
+    return fmt::format("{}[{}]", top.path, top.value.items.size());
+  }
+  bool end_container() {
+    Value v = std::move(m_stack.back().value);
+    m_stack.pop_back();
+    return add(std::move(v));
+  }
+  bool add(Value v) {
+    if (m_stack.empty()) {
+      m_root = std::move(v);
+    } else {
+      m_stack.back().value.items.push_back(std::move(v));
+    }
+    return true;
+  }
+
+  std::vector<Frame> m_stack;
+  Value m_root;
+  std::string m_error;
+  std::string m_error_key;
+};
+
+// ------------------------------------------------------------------------------------------
+// Key paths and spelling suggestions.
+
+std::string join(const std::string& path, std::string_view key) {
+  return path.empty() ? std::string(key) : path + "." + std::string(key);
+}
+
+std::string item(const std::string& path, std::size_t i) { return fmt::format("{}[{}]", path, i); }
+
+std::string lowercase(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+/// Case-insensitive edit distance counting adjacent transpositions as one edit.
+std::size_t edit_distance(std::string_view a_in, std::string_view b_in) {
+  const std::string a = lowercase(a_in);
+  const std::string b = lowercase(b_in);
+  const std::size_t n = a.size();
+  const std::size_t m = b.size();
+  std::vector<std::vector<std::size_t>> d(n + 1, std::vector<std::size_t>(m + 1, 0));
+  for (std::size_t i = 0; i <= n; ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= m; ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= n; ++i) {
+    for (std::size_t j = 1; j <= m; ++j) {
+      const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+      }
+    }
+  }
+  return d[n][m];
+}
+
+/// The candidate closest to `word`, when it is close enough to be a likely misspelling.
+template <class Range>
+std::optional<std::string> closest(std::string_view word, const Range& candidates) {
+  std::optional<std::string> best;
+  std::size_t best_distance = SIZE_MAX;
+  const std::string lower_word = lowercase(word);
+  for (const auto& candidate_in : candidates) {
+    const std::string_view candidate(candidate_in);
+    const std::size_t distance = edit_distance(word, candidate);
+    const std::size_t threshold = std::max<std::size_t>(1, (candidate.size() + 1) / 3);
+    const std::string lower_candidate = lowercase(candidate);
+    const std::size_t shorter = std::min(lower_word.size(), lower_candidate.size());
+    const bool prefix = shorter >= 3 && lower_word.compare(0, shorter, lower_candidate, 0, shorter) == 0;
+    if ((distance <= threshold || prefix) && distance < best_distance) {
+      best = std::string(candidate);
+      best_distance = distance;
+    }
+  }
+  return best;
+}
+
+/// " (did you mean "x"?)" or "".
+template <class Range>
+std::string did_you_mean(std::string_view word, const Range& candidates) {
+  if (auto best = closest(word, candidates)) return fmt::format(" (did you mean \"{}\"?)", *best);
+  return "";
+}
+
+/// "a, b, c" for a list of names.
+template <class Range>
+std::string list_names(const Range& names) {
+  std::string out;
+  for (const auto& name : names) {
+    if (!out.empty()) out += ", ";
+    out += std::string_view(name);
+  }
+  return out;
+}
+
+constexpr double kDegree = std::numbers::pi / 180.0;
+
+/// A key allowed only in another variant of a table, with the message explaining why.
+struct KeyHint {
+  std::string_view key;
+  std::string_view message;
+};
+
+using Keys = std::vector<std::string_view>;
+
+/// The keys of the top level of a case file.
+const Keys kTopLevelKeys = {"title", "material", "fiber", "fix", "step", "solver", "output"};
+
+// ------------------------------------------------------------------------------------------
+// Schema validation, written once for both formats.
+
+class Reader {
+ public:
+  Reader(std::string file, bool json) : m_file(std::move(file)), m_json(json) {}
+
+  Case read(const Value& root) const;
+
+ private:
+  [[noreturn]] void fail(const std::string& key, const std::string& message, const Value* at) const {
+    std::string full = message;
+    if (at != nullptr && at->line > 0) full += fmt::format(" (line {})", at->line);
+    throw InputError(m_file, key, full);
+  }
+
+  std::string describe(const Value& v) const {
+    switch (v.type) {
+      case Value::Type::Null: return "null";
+      case Value::Type::Boolean: return v.boolean ? "a boolean (true)" : "a boolean (false)";
+      case Value::Type::Integer: return fmt::format("an integer ({})", v.integer);
+      case Value::Type::Float: return fmt::format("a floating-point number ({})", v.number);
+      case Value::Type::String: return fmt::format("a string (\"{}\")", v.text);
+      case Value::Type::Array:
+        return fmt::format("an array of {} element{}", v.items.size(), v.items.size() == 1 ? "" : "s");
+      case Value::Type::Table: return m_json ? "an object" : "a table";
+      case Value::Type::Other: return v.text;
+    }
+    return "an unknown value";
+  }
+
+  /// "an array of tables ([[fiber]])" or "an array of objects".
+  std::string table_array_word(std::string_view name) const {
+    if (m_json) return "an array of objects";
+    return fmt::format("an array of tables ([[{}]])", name);
+  }
+
+  std::string table_word() const { return m_json ? "an object" : "a table"; }
+
+  // -- tables --------------------------------------------------------------------------
+
+  /// Fails on the first key of `table` that is not in `known`.
+  void check_keys(const Value& table, const std::string& path, const Keys& known,
+                  const std::vector<KeyHint>& hints = {}) const {
+    const Value* first_bad = nullptr;
+    std::size_t first_index = 0;
+    for (std::size_t i = 0; i < table.keys.size(); ++i) {
+      if (std::find(known.begin(), known.end(), table.keys[i]) != known.end()) continue;
+      const Value* v = &table.items[i];
+      if (first_bad == nullptr || (v->line > 0 && v->line < first_bad->line)) {
+        first_bad = v;
+        first_index = i;
+      }
+    }
+    if (first_bad == nullptr) return;
+    const std::string& key = table.keys[first_index];
+    for (const KeyHint& hint : hints) {
+      if (hint.key == key) fail(join(path, key), std::string(hint.message), first_bad);
+    }
+    std::string message = fmt::format("unknown key \"{}\"", key);
+    if (auto best = closest(key, known)) {
+      message += fmt::format(" (did you mean \"{}\"?)", *best);
+    } else {
+      message += fmt::format("; allowed keys here: {}", list_names(known));
+    }
+    if (!m_json && !path.empty() &&
+        std::find(kTopLevelKeys.begin(), kTopLevelKeys.end(), key) != kTopLevelKeys.end()) {
+      message += "; a top-level key must be written before the first [table] header";
+    }
+    fail(join(path, key), message, first_bad);
+  }
+
+  const Value& require(const Value& table, const std::string& path, std::string_view key,
+                       std::string_view expected) const {
+    if (const Value* v = find(table, key)) return *v;
+    fail(join(path, key), fmt::format("missing required key (expected {})", expected), &table);
+  }
+
+  // -- conversions ---------------------------------------------------------------------
+
+  double to_number(const Value& v, const std::string& key) const {
+    double x = 0;
+    if (v.type == Value::Type::Integer) {
+      x = static_cast<double>(v.integer);
+    } else if (v.type == Value::Type::Float) {
+      x = v.number;
+    } else {
+      fail(key, fmt::format("expected a number, got {}", describe(v)), &v);
+    }
+    if (!std::isfinite(x)) fail(key, fmt::format("expected a finite number, got {}", x), &v);
+    return x;
+  }
+
+  std::int64_t to_integer(const Value& v, const std::string& key) const {
+    if (v.type == Value::Type::Integer) return v.integer;
+    if (v.type == Value::Type::Float && std::isfinite(v.number) && v.number == std::trunc(v.number)) {
+      fail(key,
+           fmt::format("expected an integer, got the floating-point number {} (write it without "
+                       "a decimal point or exponent)",
+                       v.number),
+           &v);
+    }
+    fail(key, fmt::format("expected an integer, got {}", describe(v)), &v);
+  }
+
+  int to_int(const Value& v, const std::string& key, int minimum) const {
+    const std::int64_t i = to_integer(v, key);
+    if (i < minimum) fail(key, fmt::format("must be >= {}, got {}", minimum, i), &v);
+    if (i > INT_MAX) fail(key, fmt::format("must be <= {}, got {}", INT_MAX, i), &v);
+    return static_cast<int>(i);
+  }
+
+  std::string to_string(const Value& v, const std::string& key) const {
+    if (v.type != Value::Type::String) fail(key, fmt::format("expected a string, got {}", describe(v)), &v);
+    return v.text;
+  }
+
+  std::string to_name(const Value& v, const std::string& key) const {
+    std::string name = to_string(v, key);
+    if (name.empty()) fail(key, "expected a non-empty name, got an empty string", &v);
+    return name;
+  }
+
+  bool to_bool(const Value& v, const std::string& key) const {
+    if (v.type != Value::Type::Boolean) {
+      fail(key, fmt::format("expected a boolean (true or false), got {}", describe(v)), &v);
+    }
+    return v.boolean;
+  }
+
+  std::vector<double> to_numbers(const Value& v, const std::string& key, std::size_t n) const {
+    const std::string expected = fmt::format("expected an array of {} numbers", n);
+    if (v.type != Value::Type::Array) fail(key, fmt::format("{}, got {}", expected, describe(v)), &v);
+    if (v.items.size() != n) {
+      fail(key, fmt::format("{}, got {}", expected, describe(v)), &v);
+    }
+    std::vector<double> out;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Value& e = v.items[i];
+      if (e.type == Value::Type::Integer) {
+        out.push_back(static_cast<double>(e.integer));
+      } else if (e.type == Value::Type::Float) {
+        if (!std::isfinite(e.number)) {
+          fail(key, fmt::format("{} (finite), element {} is {}", expected, i, e.number), &v);
+        }
+        out.push_back(e.number);
+      } else {
+        fail(key, fmt::format("{}, element {} is {}", expected, i, describe(e)), &v);
+      }
+    }
+    return out;
+  }
+
+  Vec3 to_vec3(const Value& v, const std::string& key) const {
+    const std::vector<double> x = to_numbers(v, key, 3);
+    return Vec3(x[0], x[1], x[2]);
+  }
+
+  Vec3 to_direction(const Value& v, const std::string& key) const {
+    const Vec3 d = to_vec3(v, key);
+    if (!(d.norm() > 0)) fail(key, "expected a nonzero vector, got [0, 0, 0]", &v);
+    return d.normalized();
+  }
+
+  void expect_table(const Value& v, const std::string& key) const {
+    if (v.type != Value::Type::Table) {
+      fail(key, fmt::format("expected {}, got {}", table_word(), describe(v)), &v);
+    }
+  }
+
+  const std::vector<Value>& to_table_array(const Value& v, const std::string& key,
+                                           std::string_view name) const {
+    if (v.type != Value::Type::Array) {
+      fail(key, fmt::format("expected {}, got {}", table_array_word(name), describe(v)), &v);
+    }
+    for (std::size_t i = 0; i < v.items.size(); ++i) {
+      if (v.items[i].type != Value::Type::Table) {
+        fail(item(key, i), fmt::format("expected {}, got {}", table_word(), describe(v.items[i])),
+             &v.items[i]);
+      }
+    }
+    return v.items;
+  }
+
+  double positive(const Value& v, const std::string& key) const {
+    const double x = to_number(v, key);
+    if (!(x > 0)) fail(key, fmt::format("must be > 0, got {}", x), &v);
+    return x;
+  }
+
+  // -- sections ------------------------------------------------------------------------
+
+  MaterialSpec read_material(const Value& t, const std::string& path) const;
+  FiberSpec read_fiber(const Value& t, const std::string& path,
+                       const std::vector<MaterialSpec>& materials) const;
+  PathSpec read_path(const Value& t, const std::string& path) const;
+  NodeRef read_node(const Value& t, const std::string& path,
+                    const std::vector<FiberSpec>& fibers) const;
+  FixSpec read_fix(const Value& t, const std::string& path,
+                   const std::vector<FiberSpec>& fibers) const;
+  StepSpec read_step(const Value& t, const std::string& path, std::size_t k,
+                     const std::vector<FiberSpec>& fibers) const;
+  LoadSpec read_load(const Value& t, const std::string& path,
+                     const std::vector<FiberSpec>& fibers) const;
+  DisplacementSpec read_displacement(const Value& t, const std::string& path,
+                                     const std::vector<FiberSpec>& fibers) const;
+  SolverSpec read_solver(const Value& t, const std::string& path) const;
+  OutputSpec read_output(const Value& t, const std::string& path) const;
+
+  std::string m_file;
+  bool m_json;
+};
+
+MaterialSpec Reader::read_material(const Value& t, const std::string& path) const {
+  MaterialSpec m;
+  if (const Value* v = find(t, "model")) {
+    const std::string key = join(path, "model");
+    const std::string model = to_string(*v, key);
+    if (model == "isotropic") {
+      m.model = MaterialSpec::Model::Isotropic;
+    } else if (model == "transverse") {
+      m.model = MaterialSpec::Model::Transverse;
+    } else {
+      const Keys models = {"isotropic", "transverse"};
+      fail(key,
+           fmt::format("expected \"isotropic\" or \"transverse\", got \"{}\"{}", model,
+                       did_you_mean(model, models)),
+           v);
+    }
+  }
+  if (m.model == MaterialSpec::Model::Isotropic) {
+    const std::string_view only = "only allowed with model = \"transverse\"";
+    check_keys(t, path, {"name", "model", "young", "poisson"},
+               {{"young_transverse", only}, {"shear_axial", only}, {"poisson_transverse", only}});
+  } else {
+    check_keys(t, path,
+               {"name", "model", "young", "poisson", "young_transverse", "shear_axial",
+                "poisson_transverse"});
+  }
+
+  m.name = to_name(require(t, path, "name", "a string"), join(path, "name"));
+  m.young = positive(require(t, path, "young", "a number > 0 [Pa]"), join(path, "young"));
+  const std::string poisson_key = join(path, "poisson");
+  if (m.model == MaterialSpec::Model::Isotropic) {
+    const Value& v = require(t, path, "poisson", "a number in [0, 0.5)");
+    m.poisson = to_number(v, poisson_key);
+    if (!(m.poisson >= 0 && m.poisson < 0.5)) {
+      fail(poisson_key, fmt::format("must be in [0, 0.5) for an isotropic material, got {}", m.poisson),
+           &v);
+    }
+    return m;
+  }
+
+  m.poisson = to_number(require(t, path, "poisson", "a number (nu_LT)"), poisson_key);
+  m.young_transverse = positive(require(t, path, "young_transverse", "a number > 0 [Pa]"),
+                                join(path, "young_transverse"));
+  m.shear_axial =
+      positive(require(t, path, "shear_axial", "a number > 0 [Pa]"), join(path, "shear_axial"));
+  const std::string nu_tt_key = join(path, "poisson_transverse");
+  const Value& nu_tt = require(t, path, "poisson_transverse", "a number in (-1, 1)");
+  m.poisson_transverse = to_number(nu_tt, nu_tt_key);
+  // The normal block of the compliance matrix (axis 3 = fiber axis) is
+  //   [ 1/ET     -nuTT/ET  -nuLT/EL ]
+  //   [ -nuTT/ET  1/ET     -nuLT/EL ]
+  //   [ -nuLT/EL -nuLT/EL   1/EL    ]
+  // with determinant (1 + nuTT)/ET * ((1 - nuTT)/(ET EL) - 2 nuLT^2/EL^2); the shear terms are
+  // 1/G_LT and 2 (1 + nuTT)/ET. It is positive definite iff nuTT > -1 and
+  // 1 - nuTT - 2 nuLT^2 ET/EL > 0.
+  if (!(m.poisson_transverse > -1)) {
+    fail(nu_tt_key,
+         fmt::format("must be > -1 (otherwise the compliance matrix is not positive definite), got {}",
+                     m.poisson_transverse),
+         &nu_tt);
+  }
+  const double margin = 1 - m.poisson_transverse -
+                        2 * m.poisson * m.poisson * m.young_transverse / m.young;
+  if (!(margin > 0)) {
+    fail(path,
+         fmt::format("the compliance matrix is not positive definite: need 1 - poisson_transverse - "
+                     "2 poisson^2 young_transverse / young > 0, got {}",
+                     margin),
+         &t);
+  }
+  return m;
+}
+
+PathSpec Reader::read_path(const Value& t, const std::string& path) const {
+  const Value* points = find(t, "points");
+  const Value* arc = find(t, "arc");
+  const Value* helix = find(t, "helix");
+  std::vector<std::string_view> given;
+  if (points) given.push_back("points");
+  if (arc) given.push_back("arc");
+  if (helix) given.push_back("helix");
+  if (given.empty()) {
+    fail(join(path, "points"),
+         "missing the fiber path: give exactly one of points (a polyline), arc or helix", &t);
+  }
+  if (given.size() > 1) {
+    fail(path,
+         fmt::format("give exactly one of points, arc or helix, not several (found {})",
+                     list_names(given)),
+         &t);
+  }
+
+  PathSpec p;
+  if (points) {
+    p.kind = PathSpec::Kind::Polyline;
+    const std::string key = join(path, "points");
+    if (points->type != Value::Type::Array) {
+      fail(key, fmt::format("expected an array of points (arrays of 3 numbers), got {}",
+                            describe(*points)),
+           points);
+    }
+    if (points->items.size() < 2) {
+      fail(key, fmt::format("expected at least 2 points, got {}", points->items.size()), points);
+    }
+    for (std::size_t i = 0; i < points->items.size(); ++i) {
+      p.points.push_back(to_vec3(points->items[i], item(key, i)));
+    }
+    double extent = 0;
+    for (const Vec3& x : p.points) extent = std::max(extent, (x - p.points.front()).norm());
+    for (std::size_t i = 1; i < p.points.size(); ++i) {
+      if ((p.points[i] - p.points[i - 1]).norm() <= 1e-12 * extent) {
+        fail(item(key, i),
+             fmt::format("points {} and {} coincide (consecutive points must be distinct)", i - 1, i),
+             &points->items[i]);
+      }
+    }
+    return p;
+  }
+
+  const bool is_arc = arc != nullptr;
+  const Value& table = is_arc ? *arc : *helix;
+  const std::string base = join(path, is_arc ? "arc" : "helix");
+  expect_table(table, base);
+  if (is_arc) {
+    p.kind = PathSpec::Kind::Arc;
+    check_keys(table, base, {"center", "axis", "radius", "start_angle", "angle"});
+  } else {
+    p.kind = PathSpec::Kind::Helix;
+    check_keys(table, base, {"center", "axis", "radius", "pitch", "turns"});
+  }
+  if (const Value* v = find(table, "center")) p.center = to_vec3(*v, join(base, "center"));
+  if (const Value* v = find(table, "axis")) p.axis = to_direction(*v, join(base, "axis"));
+  p.radius = positive(require(table, base, "radius", "a number > 0 [m]"), join(base, "radius"));
+  if (is_arc) {
+    if (const Value* v = find(table, "start_angle")) {
+      p.start_angle = to_number(*v, join(base, "start_angle")) * kDegree;
+    }
+    const std::string angle_key = join(base, "angle");
+    const Value& angle = require(table, base, "angle", "a nonzero number of degrees");
+    const double degrees = to_number(angle, angle_key);
+    if (degrees == 0) fail(angle_key, "must be nonzero (the sweep of the arc, in degrees), got 0", &angle);
+    p.angle = degrees * kDegree;
+  } else {
+    const std::string pitch_key = join(base, "pitch");
+    const Value& pitch = require(table, base, "pitch", "a number >= 0 [m per turn]");
+    p.pitch = to_number(pitch, pitch_key);
+    if (!(p.pitch >= 0)) fail(pitch_key, fmt::format("must be >= 0, got {}", p.pitch), &pitch);
+    p.turns = positive(require(table, base, "turns", "a number > 0"), join(base, "turns"));
+  }
+  return p;
+}
+
+FiberSpec Reader::read_fiber(const Value& t, const std::string& path,
+                             const std::vector<MaterialSpec>& materials) const {
+  check_keys(t, path,
+             {"name", "material", "radius", "semi_axes", "section_direction", "points", "arc",
+              "helix", "elements"});
+  FiberSpec f;
+  f.name = to_name(require(t, path, "name", "a string"), join(path, "name"));
+
+  const std::string material_key = join(path, "material");
+  const Value& material = require(t, path, "material", "a string naming a [[material]]");
+  f.material = to_string(material, material_key);
+  const bool known = std::any_of(materials.begin(), materials.end(),
+                                 [&](const MaterialSpec& m) { return m.name == f.material; });
+  if (!known) {
+    std::vector<std::string> names;
+    for (const MaterialSpec& m : materials) names.push_back(m.name);
+    fail(material_key,
+         fmt::format("no material named \"{}\"{}; defined materials: {}", f.material,
+                     did_you_mean(f.material, names), list_names(names)),
+         &material);
+  }
+
+  const Value* radius = find(t, "radius");
+  const Value* semi_axes = find(t, "semi_axes");
+  if (radius && semi_axes) fail(path, "give either radius or semi_axes, not both", &t);
+  if (radius) {
+    f.radius = positive(*radius, join(path, "radius"));
+    f.semi_axis_1 = f.semi_axis_2 = f.radius;
+  } else if (semi_axes) {
+    const std::string key = join(path, "semi_axes");
+    const std::vector<double> a = to_numbers(*semi_axes, key, 2);
+    if (!(a[0] > 0 && a[1] > 0)) {
+      fail(key, fmt::format("both semi-axes must be > 0, got [{}, {}]", a[0], a[1]), semi_axes);
+    }
+    f.semi_axis_1 = a[0];
+    f.semi_axis_2 = a[1];
+    f.radius = std::sqrt(a[0] * a[1]);
+  } else {
+    fail(join(path, "radius"),
+         "missing the section: give radius (a number > 0) or semi_axes (an array of 2 numbers > 0)",
+         &t);
+  }
+
+  f.path = read_path(t, path);
+
+  if (const Value* v = find(t, "section_direction")) {
+    const std::string key = join(path, "section_direction");
+    const Vec3 d = to_direction(*v, key);
+    if (f.path.kind == PathSpec::Kind::Polyline) {
+      const Vec3 tangent = (f.path.points[1] - f.path.points[0]).normalized();
+      if (d.cross(tangent).norm() <= 1e-8) {
+        fail(key,
+             "must not be parallel to the start tangent of the fiber (the first segment of points)",
+             v);
+      }
+    }
+    f.section_direction = d;
+  }
+
+  f.elements = to_int(require(t, path, "elements", "an integer >= 1"), join(path, "elements"), 1);
+  return f;
+}
+
+NodeRef Reader::read_node(const Value& t, const std::string& path,
+                          const std::vector<FiberSpec>& fibers) const {
+  NodeRef ref;
+  const std::string fiber_key = join(path, "fiber");
+  const Value& fiber = require(t, path, "fiber", "a string naming a [[fiber]]");
+  ref.fiber = to_string(fiber, fiber_key);
+  auto it = std::find_if(fibers.begin(), fibers.end(),
+                         [&](const FiberSpec& f) { return f.name == ref.fiber; });
+  if (it == fibers.end()) {
+    std::vector<std::string> names;
+    for (const FiberSpec& f : fibers) names.push_back(f.name);
+    fail(fiber_key,
+         fmt::format("no fiber named \"{}\"{}; defined fibers: {}", ref.fiber,
+                     did_you_mean(ref.fiber, names), list_names(names)),
+         &fiber);
+  }
+
+  const Value* node = find(t, "node");
+  const Value* at = find(t, "at");
+  if (node && at) fail(path, "give either node or at, not both", &t);
+  if (!node && !at) {
+    fail(join(path, "node"),
+         "missing required key (expected node = \"first\", \"last\" or a node index, or "
+         "at = a fraction of the fiber length in [0, 1])",
+         &t);
+  }
+  if (node) {
+    const std::string key = join(path, "node");
+    const Index count = 2 * static_cast<Index>(it->elements) + 1;
+    if (node->type == Value::Type::String) {
+      if (node->text == "first") {
+        ref.kind = NodeRef::Kind::First;
+      } else if (node->text == "last") {
+        ref.kind = NodeRef::Kind::Last;
+      } else {
+        const Keys words = {"first", "last"};
+        fail(key,
+             fmt::format("expected \"first\", \"last\" or a node index (integer), got \"{}\"{}",
+                         node->text, did_you_mean(node->text, words)),
+             node);
+      }
+    } else if (node->type == Value::Type::Integer) {
+      if (node->integer < 0 || node->integer >= count) {
+        fail(key,
+             fmt::format("node index out of range: fiber \"{}\" has {} nodes (indices 0 to {}), got {}",
+                         it->name, count, count - 1, node->integer),
+             node);
+      }
+      ref.kind = NodeRef::Kind::Index;
+      ref.index = node->integer;
+    } else {
+      fail(key,
+           fmt::format("expected \"first\", \"last\" or a node index (integer), got {}",
+                       describe(*node)),
+           node);
+    }
+  } else {
+    const std::string key = join(path, "at");
+    ref.kind = NodeRef::Kind::Fraction;
+    ref.fraction = to_number(*at, key);
+    if (!(ref.fraction >= 0 && ref.fraction <= 1)) {
+      fail(key, fmt::format("must be in [0, 1] (a fraction of the fiber length), got {}", ref.fraction),
+           at);
+    }
+  }
+  return ref;
+}
+
+FixSpec Reader::read_fix(const Value& t, const std::string& path,
+                         const std::vector<FiberSpec>& fibers) const {
+  check_keys(t, path, {"fiber", "node", "at", "dofs"});
+  FixSpec fix;
+  fix.node = read_node(t, path, fibers);
+  if (const Value* v = find(t, "dofs")) {
+    const std::string key = join(path, "dofs");
+    const std::string dofs = to_string(*v, key);
+    if (dofs == "all") {
+      fix.position = fix.sections = true;
+    } else if (dofs == "position") {
+      fix.position = true;
+      fix.sections = false;
+    } else if (dofs == "sections") {
+      fix.position = false;
+      fix.sections = true;
+    } else {
+      const Keys words = {"all", "position", "sections"};
+      fail(key,
+           fmt::format("expected \"all\", \"position\" or \"sections\", got \"{}\"{}", dofs,
+                       did_you_mean(dofs, words)),
+           v);
+    }
+  }
+  return fix;
+}
+
+LoadSpec Reader::read_load(const Value& t, const std::string& path,
+                           const std::vector<FiberSpec>& fibers) const {
+  check_keys(t, path, {"fiber", "node", "at", "force", "moment"});
+  LoadSpec load;
+  load.node = read_node(t, path, fibers);
+  const Value* force = find(t, "force");
+  const Value* moment = find(t, "moment");
+  if (!force && !moment) {
+    fail(join(path, "force"),
+         "missing required key (expected force and/or moment, each an array of 3 numbers)", &t);
+  }
+  if (force) load.force = to_vec3(*force, join(path, "force"));
+  if (moment) load.moment = to_vec3(*moment, join(path, "moment"));
+  return load;
+}
+
+DisplacementSpec Reader::read_displacement(const Value& t, const std::string& path,
+                                           const std::vector<FiberSpec>& fibers) const {
+  check_keys(t, path, {"fiber", "node", "at", "value"});
+  DisplacementSpec d;
+  d.node = read_node(t, path, fibers);
+  const std::string key = join(path, "value");
+  const std::string expected = "expected an array of 3 components, each a number or \"free\"";
+  const Value& v = require(t, path, "value", "an array of 3 components, each a number or \"free\"");
+  if (v.type != Value::Type::Array) fail(key, fmt::format("{}, got {}", expected, describe(v)), &v);
+  if (v.items.size() != 3) {
+    fail(key, fmt::format("{}, got {}", expected, describe(v)), &v);
+  }
+  bool any = false;
+  for (std::size_t i = 0; i < 3; ++i) {
+    const Value& e = v.items[i];
+    if (e.type == Value::Type::String && e.text == "free") {
+      d.value[i] = std::nullopt;
+      continue;
+    }
+    if (e.type != Value::Type::Integer && e.type != Value::Type::Float) {
+      fail(key, fmt::format("{}, element {} is {}", expected, i, describe(e)), &v);
+    }
+    const double x = e.type == Value::Type::Integer ? static_cast<double>(e.integer) : e.number;
+    if (!std::isfinite(x)) fail(key, fmt::format("{}, element {} is {}", expected, i, x), &v);
+    d.value[i] = x;
+    any = true;
+  }
+  if (!any) fail(key, "all 3 components are \"free\": at least one must be a number", &v);
+  return d;
+}
+
+StepSpec Reader::read_step(const Value& t, const std::string& path, std::size_t k,
+                           const std::vector<FiberSpec>& fibers) const {
+  check_keys(t, path, {"name", "increments", "max_increments", "load", "displacement"});
+  StepSpec step;
+  if (const Value* v = find(t, "name")) {
+    step.name = to_name(*v, join(path, "name"));
+  } else {
+    step.name = fmt::format("step{}", k);
+  }
+  if (const Value* v = find(t, "increments")) step.increments = to_int(*v, join(path, "increments"), 1);
+  if (const Value* v = find(t, "max_increments")) {
+    const std::string key = join(path, "max_increments");
+    step.max_increments = to_int(*v, key, 0);
+    if (step.max_increments != 0 && step.max_increments < step.increments) {
+      fail(key,
+           fmt::format("must be 0 (automatic) or >= increments ({}), got {}", step.increments,
+                       step.max_increments),
+           v);
+    }
+  }
+  if (const Value* v = find(t, "load")) {
+    const std::string key = join(path, "load");
+    const std::vector<Value>& loads = to_table_array(*v, key, "step.load");
+    for (std::size_t i = 0; i < loads.size(); ++i) {
+      step.loads.push_back(read_load(loads[i], item(key, i), fibers));
+    }
+  }
+  if (const Value* v = find(t, "displacement")) {
+    const std::string key = join(path, "displacement");
+    const std::vector<Value>& displacements = to_table_array(*v, key, "step.displacement");
+    for (std::size_t i = 0; i < displacements.size(); ++i) {
+      step.displacements.push_back(read_displacement(displacements[i], item(key, i), fibers));
+    }
+  }
+  return step;
+}
+
+SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
+  expect_table(t, path);
+  check_keys(t, path,
+             {"residual_tolerance", "displacement_tolerance", "max_iterations", "max_cuts",
+              "line_search", "linear_solver"});
+  SolverSpec s;
+  if (const Value* v = find(t, "residual_tolerance")) {
+    s.residual_tolerance = positive(*v, join(path, "residual_tolerance"));
+  }
+  if (const Value* v = find(t, "displacement_tolerance")) {
+    s.displacement_tolerance = positive(*v, join(path, "displacement_tolerance"));
+  }
+  if (const Value* v = find(t, "max_iterations")) {
+    s.max_iterations = to_int(*v, join(path, "max_iterations"), 1);
+  }
+  if (const Value* v = find(t, "max_cuts")) s.max_cuts = to_int(*v, join(path, "max_cuts"), 0);
+  if (const Value* v = find(t, "line_search")) s.line_search = to_bool(*v, join(path, "line_search"));
+  if (const Value* v = find(t, "linear_solver")) {
+    const std::string key = join(path, "linear_solver");
+    s.linear_solver = to_string(*v, key);
+    if (s.linear_solver != "cholmod" && s.linear_solver != "eigen") {
+      const Keys words = {"cholmod", "eigen"};
+      fail(key,
+           fmt::format("expected \"cholmod\" or \"eigen\", got \"{}\"{}", s.linear_solver,
+                       did_you_mean(s.linear_solver, words)),
+           v);
+    }
+  }
+  return s;
+}
+
+OutputSpec Reader::read_output(const Value& t, const std::string& path) const {
+  expect_table(t, path);
+  check_keys(t, path, {"every", "tube_sides"});
+  OutputSpec o;
+  if (const Value* v = find(t, "every")) o.every = to_int(*v, join(path, "every"), 1);
+  if (const Value* v = find(t, "tube_sides")) o.tube_sides = to_int(*v, join(path, "tube_sides"), 3);
+  return o;
+}
+
+Case Reader::read(const Value& root) const {
+  check_keys(root, "", kTopLevelKeys);
+  Case c;
+  if (const Value* v = find(root, "title")) c.title = to_string(*v, "title");
+
+  // Materials.
+  {
+    const Value& v = require(root, "", "material", table_array_word("material"));
+    const std::vector<Value>& tables = to_table_array(v, "material", "material");
+    if (tables.empty()) fail("material", "at least one material is required", &v);
+    for (std::size_t i = 0; i < tables.size(); ++i) {
+      const std::string path = item("material", i);
+      MaterialSpec m = read_material(tables[i], path);
+      for (std::size_t j = 0; j < c.materials.size(); ++j) {
+        if (c.materials[j].name == m.name) {
+          fail(join(path, "name"),
+               fmt::format("duplicate material name \"{}\" (already used by material[{}])", m.name, j),
+               find(tables[i], "name"));
+        }
+      }
+      c.materials.push_back(std::move(m));
+    }
+  }
+
+  // Fibers.
+  {
+    const Value& v = require(root, "", "fiber", table_array_word("fiber"));
+    const std::vector<Value>& tables = to_table_array(v, "fiber", "fiber");
+    if (tables.empty()) fail("fiber", "at least one fiber is required", &v);
+    for (std::size_t i = 0; i < tables.size(); ++i) {
+      const std::string path = item("fiber", i);
+      FiberSpec f = read_fiber(tables[i], path, c.materials);
+      for (std::size_t j = 0; j < c.fibers.size(); ++j) {
+        if (c.fibers[j].name == f.name) {
+          fail(join(path, "name"),
+               fmt::format("duplicate fiber name \"{}\" (already used by fiber[{}])", f.name, j),
+               find(tables[i], "name"));
+        }
+      }
+      c.fibers.push_back(std::move(f));
+    }
+  }
+
+  // Fixes (optional).
+  if (const Value* v = find(root, "fix")) {
+    const std::vector<Value>& tables = to_table_array(*v, "fix", "fix");
+    for (std::size_t i = 0; i < tables.size(); ++i) {
+      c.fixes.push_back(read_fix(tables[i], item("fix", i), c.fibers));
+    }
+  }
+
+  // Steps.
+  {
+    const Value& v = require(root, "", "step", table_array_word("step"));
+    const std::vector<Value>& tables = to_table_array(v, "step", "step");
+    if (tables.empty()) fail("step", "at least one step is required", &v);
+    for (std::size_t i = 0; i < tables.size(); ++i) {
+      const std::string path = item("step", i);
+      StepSpec s = read_step(tables[i], path, i, c.fibers);
+      for (std::size_t j = 0; j < c.steps.size(); ++j) {
+        if (c.steps[j].name == s.name) {
+          fail(join(path, "name"),
+               fmt::format("duplicate step name \"{}\" (already used by step[{}])", s.name, j),
+               find(tables[i], "name") ? find(tables[i], "name") : &tables[i]);
+        }
+      }
+      c.steps.push_back(std::move(s));
+    }
+  }
+
+  if (const Value* v = find(root, "solver")) c.solver = read_solver(*v, "solver");
+  if (const Value* v = find(root, "output")) c.output = read_output(*v, "output");
+  return c;
+}
+
+/// Validates `root` and fills in the file and name of the case.
+Case finish(const Value& root, const std::string& file_label, bool json) {
+  Case c = Reader(file_label, json).read(root);
+  c.file = file_label;
+  c.name = std::filesystem::path(file_label).stem().string();
+  return c;
+}
+
+std::string read_text(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw InputError(path, "(file)", "cannot read the file: it is a directory");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    const int error = errno;
+    throw InputError(path, "(file)",
+                     fmt::format("cannot open the file: {}",
+                                 error != 0 ? std::strerror(error) : "unknown error"));
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError(path, "(file)", "cannot read the file: I/O error");
+  return text.str();
+}
+
+}  // namespace
+
+Case parse_case_toml(const std::string& text, const std::string& file_label) {
+  toml::table table;
+  try {
+    table = toml::parse(text, std::string_view(file_label));
+  } catch (const toml::parse_error& e) {
+    const auto& begin = e.source().begin;
+    throw InputError(file_label, "(file)",
+                     fmt::format("TOML syntax error at line {}, column {}: {}", begin.line,
+                                 begin.column, e.description()));
+  }
+  return finish(from_toml(table), file_label, false);
+}
+
+Case parse_case_json(const std::string& text, const std::string& file_label) {
+  JsonBuilder builder;
+  if (!nlohmann::json::sax_parse(text, &builder)) {
+    const std::string key = builder.error_key().empty() ? "(file)" : builder.error_key();
+    const std::string message = builder.error().empty() ? "JSON syntax error" : builder.error();
+    throw InputError(file_label, key, message);
+  }
+  if (builder.root().type != Value::Type::Table) {
+    throw InputError(file_label, "(file)", "expected a JSON object at the top level");
+  }
+  return finish(builder.root(), file_label, true);
+}
+
+Case read_case(const std::string& path) {
+  const std::string extension = lowercase(std::filesystem::path(path).extension().string());
+  if (extension != ".toml" && extension != ".json") {
+    throw InputError(path, "(file)",
+                     fmt::format("unknown case file type \"{}\": expected a .toml or .json file",
+                                 extension));
+  }
+  const std::string text = read_text(path);
+  return extension == ".toml" ? parse_case_toml(text, path) : parse_case_json(text, path);
+}
+
+}  // namespace fibra

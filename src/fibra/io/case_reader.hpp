@@ -1,0 +1,20 @@
+#pragma once
+/// Reading and validating case files (TOML or JSON, one schema; see docs/case-file.md).
+/// Every problem in the input is reported as an InputError naming the file, the dotted key
+/// path (e.g. `fiber[1].radius`, `step[0].load[2].force`) and what was expected.
+#include <string>
+
+#include "fibra/model/case.hpp"
+
+namespace fibra {
+
+/// Reads and validates the case file at `path`; ".toml" or ".json" selects the format.
+Case read_case(const std::string& path);
+
+/// Parses and validates a TOML case held in `text`; `file_label` stands for the file name.
+Case parse_case_toml(const std::string& text, const std::string& file_label);
+
+/// Parses and validates a JSON case held in `text`; `file_label` stands for the file name.
+Case parse_case_json(const std::string& text, const std::string& file_label);
+
+}  // namespace fibra

@@ -1,0 +1,446 @@
+#include "fibra/io/output_writer.hpp"
+
+#include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fmt/format.h>
+#include <numbers>
+#include <regex>
+#include <string_view>
+#include <system_error>
+
+#include "fibra/beam/beam_element.hpp"
+#include "fibra/core/error.hpp"
+
+namespace fibra {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+[[noreturn]] void io_fail(std::string_view what, const std::string& path, int err) {
+  throw RunError(fmt::format("{} '{}': {}", what, path, err != 0 ? std::strerror(err) : "unknown error"));
+}
+
+/// A file opened for (binary) writing whose every operation is checked.
+class CheckedFile {
+ public:
+  explicit CheckedFile(std::string path) : m_path(std::move(path)) {
+    errno = 0;
+    m_file = std::fopen(m_path.c_str(), "wb");
+    if (!m_file) io_fail("cannot open for writing", m_path, errno);
+  }
+  ~CheckedFile() {
+    if (m_file) std::fclose(m_file);
+  }
+  CheckedFile(const CheckedFile&) = delete;
+  CheckedFile& operator=(const CheckedFile&) = delete;
+
+  void write(const void* data, size_t bytes) {
+    if (bytes == 0) return;
+    errno = 0;
+    if (std::fwrite(data, 1, bytes, m_file) != bytes) io_fail("cannot write", m_path, errno);
+  }
+  void write(std::string_view text) { write(text.data(), text.size()); }
+
+  /// Flushes and closes, reporting errors that only show up then (e.g. a full disk).
+  void close() {
+    errno = 0;
+    const bool flush_ok = std::fflush(m_file) == 0 && !std::ferror(m_file);
+    const int flush_err = errno;
+    errno = 0;
+    const int rc = std::fclose(m_file);
+    m_file = nullptr;
+    if (!flush_ok) io_fail("cannot write", m_path, flush_err);
+    if (rc != 0) io_fail("cannot close", m_path, errno);
+  }
+
+ private:
+  std::string m_path;
+  std::FILE* m_file = nullptr;
+};
+
+/// Writes `path` atomically: `fill` writes into PATH.tmp, which then replaces PATH.
+template <class Fill>
+void write_atomic(const std::string& path, Fill&& fill) {
+  const std::string tmp = path + ".tmp";
+  try {
+    CheckedFile file(tmp);
+    fill(file);
+    file.close();
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw;
+  }
+  errno = 0;
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    io_fail("cannot rename " + tmp + " to", path, err);
+  }
+}
+
+/// A CSV field: quoted (with doubled quotes) when it holds a separator, quote or newline.
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  out += '"';
+  return out;
+}
+
+/// Escapes text for an XML attribute value.
+std::string xml_attr(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+/// A data array of a .vtu file, stored in the appended raw block.
+struct VtuArray {
+  std::string name;      ///< empty for Points / Cells arrays that VTK names itself
+  std::string type;      ///< VTK type name: Float64, Int64, Int32, UInt8
+  int components = 1;
+  const void* data = nullptr;
+  std::uint64_t bytes = 0;
+  std::uint64_t tuples = 0;
+};
+
+template <class T>
+VtuArray vtu_array(std::string name, std::string type, int components, const std::vector<T>& v) {
+  return VtuArray{std::move(name), std::move(type), components, v.data(), v.size() * sizeof(T),
+                  v.size() / static_cast<size_t>(components)};
+}
+
+/// One .vtu piece: points, point data, and cells given by connectivity/offsets/types.
+struct VtuPiece {
+  std::vector<double> points;         ///< 3 per point
+  std::vector<double> displacement;   ///< 3 per point
+  std::vector<double> axial_strain;   ///< 1 per point
+  std::vector<double> axial_force;    ///< 1 per point
+  std::vector<double> g1;             ///< 3 per point
+  std::vector<double> g2;             ///< 3 per point
+  std::vector<std::int32_t> fiber;    ///< 1 per point
+  std::vector<std::int32_t> node;     ///< 1 per point (local node index in the fiber)
+  std::vector<std::int64_t> connectivity;
+  std::vector<std::int64_t> offsets;
+  std::vector<std::uint8_t> types;
+
+  void reserve(size_t n_points) {
+    points.reserve(3 * n_points);
+    displacement.reserve(3 * n_points);
+    axial_strain.reserve(n_points);
+    axial_force.reserve(n_points);
+    g1.reserve(3 * n_points);
+    g2.reserve(3 * n_points);
+    fiber.reserve(n_points);
+    node.reserve(n_points);
+  }
+};
+
+void push3(std::vector<double>& v, const Vec3& x) { v.insert(v.end(), {x[0], x[1], x[2]}); }
+
+void write_vtu_file(const std::string& path, const VtuPiece& p, double time) {
+  const std::vector<double> time_value{time};
+  const size_t n_points = p.axial_strain.size();
+  const size_t n_cells = p.types.size();
+
+  std::vector<VtuArray> field = {vtu_array("TimeValue", "Float64", 1, time_value)};
+  std::vector<VtuArray> point_data = {
+      vtu_array("displacement", "Float64", 3, p.displacement),
+      vtu_array("axial_strain", "Float64", 1, p.axial_strain),
+      vtu_array("axial_force", "Float64", 1, p.axial_force),
+      vtu_array("g1", "Float64", 3, p.g1),
+      vtu_array("g2", "Float64", 3, p.g2),
+      vtu_array("fiber", "Int32", 1, p.fiber),
+      vtu_array("node", "Int32", 1, p.node),
+  };
+  std::vector<VtuArray> points = {vtu_array("Points", "Float64", 3, p.points)};
+  std::vector<VtuArray> cells = {
+      vtu_array("connectivity", "Int64", 1, p.connectivity),
+      vtu_array("offsets", "Int64", 1, p.offsets),
+      vtu_array("types", "UInt8", 1, p.types),
+  };
+
+  std::uint64_t offset = 0;
+  std::vector<const VtuArray*> order;
+  std::string xml;
+  auto add = [&](const std::vector<VtuArray>& arrays, std::string_view indent, bool tuples) {
+    for (const VtuArray& a : arrays) {
+      xml += fmt::format("{}<DataArray type=\"{}\" Name=\"{}\" NumberOfComponents=\"{}\"{} format=\"appended\" offset=\"{}\"/>\n",
+                         indent, a.type, xml_attr(a.name), a.components,
+                         tuples ? fmt::format(" NumberOfTuples=\"{}\"", a.tuples) : std::string(), offset);
+      offset += sizeof(std::uint64_t) + a.bytes;
+      order.push_back(&a);
+    }
+  };
+  const char* byte_order = std::endian::native == std::endian::little ? "LittleEndian" : "BigEndian";
+  xml += "<?xml version=\"1.0\"?>\n";
+  xml += fmt::format("<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"{}\" header_type=\"UInt64\">\n",
+                     byte_order);
+  xml += "  <UnstructuredGrid>\n    <FieldData>\n";
+  add(field, "      ", true);
+  xml += "    </FieldData>\n";
+  xml += fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", n_points, n_cells);
+  xml += "      <PointData Scalars=\"axial_force\" Vectors=\"displacement\">\n";
+  add(point_data, "        ", false);
+  xml += "      </PointData>\n      <Points>\n";
+  add(points, "        ", false);
+  xml += "      </Points>\n      <Cells>\n";
+  add(cells, "        ", false);
+  xml += "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n   _";
+
+  write_atomic(path, [&](CheckedFile& f) {
+    f.write(xml);
+    for (const VtuArray* a : order) {
+      const std::uint64_t bytes = a->bytes;
+      f.write(&bytes, sizeof bytes);
+      f.write(a->data, a->bytes);
+    }
+    f.write("\n  </AppendedData>\n</VTKFile>\n");
+  });
+}
+
+/// Nodal state used by both .vtu files.
+struct NodeState {
+  Vec3 x0, g1, g2;        ///< current
+  Vec3 x0_ref, g1_ref, g2_ref;  ///< reference
+  double strain = 0;
+  double force = 0;
+};
+
+constexpr std::uint8_t kVtkPolyLine = 4;
+constexpr std::uint8_t kVtkQuad = 9;
+
+}  // namespace
+
+void OutputWriter::FileCloser::operator()(std::FILE* f) const {
+  if (f) std::fclose(f);
+}
+
+OutputWriter::OutputWriter(std::string dir, const Model& model, std::vector<std::string> extra_columns, int tube_sides)
+    : m_dir(std::move(dir)), m_model(model), m_extra_columns(std::move(extra_columns)), m_tube_sides(tube_sides) {
+  if (m_tube_sides < 3) throw RunError(fmt::format("output: tube_sides must be at least 3, got {}", m_tube_sides));
+  if (m_dir.empty()) m_dir = ".";
+  std::error_code ec;
+  fs::create_directories(m_dir, ec);
+  if (ec) throw RunError(fmt::format("cannot create output directory '{}': {}", m_dir, ec.message()));
+  if (!fs::is_directory(m_dir, ec))
+    throw RunError(fmt::format("output path '{}' exists and is not a directory", m_dir));
+
+  // Remove what a previous run in this directory left, so that no stale collection,
+  // summary or numbered .vtu can be mistaken for output of this run.
+  static const std::regex numbered(R"((fibers|lines)_\d{6}\.vtu(\.tmp)?)");
+  for (const char* name : {"fibers.pvd", "lines.pvd", "nodes.csv", "summary.json"}) fs::remove(path(name), ec);
+  for (fs::directory_iterator it(m_dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (std::regex_match(name, numbered)) {
+      std::error_code rm;
+      fs::remove(it->path(), rm);
+    }
+  }
+
+  const std::string history = path("history.csv");
+  errno = 0;
+  m_history.reset(std::fopen(history.c_str(), "wb"));
+  if (!m_history) io_fail("cannot open for writing", history, errno);
+  std::string header = "step,step_index,increment,load_factor,iterations,residual,wall_time";
+  for (const std::string& c : m_extra_columns) header += "," + csv_field(c);
+  header += "\n";
+  errno = 0;
+  if (std::fwrite(header.data(), 1, header.size(), m_history.get()) != header.size() ||
+      std::fflush(m_history.get()) != 0)
+    io_fail("cannot write", history, errno);
+}
+
+OutputWriter::~OutputWriter() = default;
+
+std::string OutputWriter::path(const std::string& name) const { return (fs::path(m_dir) / name).string(); }
+
+void OutputWriter::check_state(const VecX& q) const {
+  if (q.size() != m_model.num_dofs())
+    throw RunError(fmt::format("output: state has {} values, the model has {} dofs", q.size(), m_model.num_dofs()));
+}
+
+void OutputWriter::write_increment(const VecX& q, const HistoryRow& row, double time, bool write_vtu_files) {
+  check_state(q);
+  write_history_row(row);
+  if (!write_vtu_files) return;
+  const int index = vtu_count();
+  write_vtu(q, index, time);
+  m_vtu_files.emplace_back(time, index);
+  write_pvd("fibers.pvd", "fibers");
+  write_pvd("lines.pvd", "lines");
+}
+
+void OutputWriter::write_history_row(const HistoryRow& row) {
+  if (row.extra.size() != m_extra_columns.size())
+    throw RunError(fmt::format("output: history row has {} extra values for {} extra columns", row.extra.size(),
+                               m_extra_columns.size()));
+  std::string line = fmt::format("{},{},{},{},{},{},{}", csv_field(row.step), row.step_index, row.increment,
+                                 row.load_factor, row.iterations, row.residual, row.wall_time);
+  for (double v : row.extra) line += fmt::format(",{}", v);
+  line += "\n";
+  // One write and an immediate flush: a killed run keeps every completed row.
+  errno = 0;
+  if (std::fwrite(line.data(), 1, line.size(), m_history.get()) != line.size() ||
+      std::fflush(m_history.get()) != 0)
+    io_fail("cannot write", path("history.csv"), errno);
+}
+
+void OutputWriter::write_vtu(const VecX& q, int index, double time) const {
+  const Index n_nodes = m_model.num_nodes();
+  const VecX& ref = m_model.reference;
+
+  // Nodal states: position, section vectors and the axial state (averaged over the two
+  // elements that share an end node).
+  std::vector<NodeState> nodes(static_cast<size_t>(n_nodes));
+  for (Index k = 0; k < n_nodes; ++k) {
+    NodeState& s = nodes[k];
+    s.x0 = q.segment<3>(9 * k);
+    s.g1 = q.segment<3>(9 * k + 3);
+    s.g2 = q.segment<3>(9 * k + 6);
+    s.x0_ref = ref.segment<3>(9 * k);
+    s.g1_ref = ref.segment<3>(9 * k + 3);
+    s.g2_ref = ref.segment<3>(9 * k + 6);
+  }
+  for (const Fiber& fib : m_model.fibers) {
+    std::vector<int> count(static_cast<size_t>(fib.num_nodes), 0);
+    for (Index e = 0; e < fib.num_elements; ++e) {
+      const BeamElement& el = m_model.elements[fib.first_element + e];
+      const Section& sec = m_model.sections[el.section];
+      for (int a = 0; a < kElementNodes; ++a) {
+        const Index local = 2 * e + a;
+        const AxialState st = beam_axial_state(el, sec, q.data() + el.first_dof, static_cast<double>(a - 1));
+        NodeState& s = nodes[fib.first_node + local];
+        s.strain += st.strain;
+        s.force += st.force;
+        ++count[local];
+      }
+    }
+    for (Index j = 0; j < fib.num_nodes; ++j) {
+      if (count[j] > 1) {
+        nodes[fib.first_node + j].strain /= count[j];
+        nodes[fib.first_node + j].force /= count[j];
+      }
+    }
+  }
+
+  // Centroid lines: one poly-line per fiber through its nodes.
+  VtuPiece lines;
+  lines.reserve(static_cast<size_t>(n_nodes));
+  for (size_t f = 0; f < m_model.fibers.size(); ++f) {
+    const Fiber& fib = m_model.fibers[f];
+    for (Index j = 0; j < fib.num_nodes; ++j) {
+      const NodeState& s = nodes[fib.first_node + j];
+      push3(lines.points, s.x0);
+      push3(lines.displacement, s.x0 - s.x0_ref);
+      lines.axial_strain.push_back(s.strain);
+      lines.axial_force.push_back(s.force);
+      push3(lines.g1, s.g1);
+      push3(lines.g2, s.g2);
+      lines.fiber.push_back(static_cast<std::int32_t>(f));
+      lines.node.push_back(static_cast<std::int32_t>(j));
+      lines.connectivity.push_back(fib.first_node + j);
+    }
+    if (fib.num_nodes >= 2) {
+      lines.offsets.push_back(static_cast<std::int64_t>(lines.connectivity.size()));
+      lines.types.push_back(kVtkPolyLine);
+    } else {
+      lines.connectivity.resize(lines.connectivity.size() - static_cast<size_t>(fib.num_nodes));
+    }
+  }
+
+  // Tube surfaces: a ring of points per node at x0 + a cos(t) g1 + b sin(t) g2, quads
+  // between consecutive rings of a fiber (outward normals when g1 x g2 points along the fiber).
+  const int n_sides = m_tube_sides;
+  std::vector<double> cos_t(n_sides), sin_t(n_sides);
+  for (int i = 0; i < n_sides; ++i) {
+    const double t = 2.0 * std::numbers::pi * i / n_sides;
+    cos_t[i] = std::cos(t);
+    sin_t[i] = std::sin(t);
+  }
+  VtuPiece tubes;
+  tubes.reserve(static_cast<size_t>(n_nodes * n_sides));
+  for (size_t f = 0; f < m_model.fibers.size(); ++f) {
+    const Fiber& fib = m_model.fibers[f];
+    const Section& sec = m_model.sections[fib.section];
+    const std::int64_t base = static_cast<std::int64_t>(tubes.fiber.size());
+    for (Index j = 0; j < fib.num_nodes; ++j) {
+      const NodeState& s = nodes[fib.first_node + j];
+      for (int i = 0; i < n_sides; ++i) {
+        const Vec3 offset = sec.a * cos_t[i] * s.g1 + sec.b * sin_t[i] * s.g2;
+        const Vec3 offset_ref = sec.a * cos_t[i] * s.g1_ref + sec.b * sin_t[i] * s.g2_ref;
+        push3(tubes.points, s.x0 + offset);
+        push3(tubes.displacement, (s.x0 + offset) - (s.x0_ref + offset_ref));
+        tubes.axial_strain.push_back(s.strain);
+        tubes.axial_force.push_back(s.force);
+        push3(tubes.g1, s.g1);
+        push3(tubes.g2, s.g2);
+        tubes.fiber.push_back(static_cast<std::int32_t>(f));
+        tubes.node.push_back(static_cast<std::int32_t>(j));
+      }
+    }
+    for (Index j = 0; j + 1 < fib.num_nodes; ++j) {
+      const std::int64_t r0 = base + j * n_sides, r1 = r0 + n_sides;
+      for (int i = 0; i < n_sides; ++i) {
+        const int i1 = (i + 1) % n_sides;
+        tubes.connectivity.insert(tubes.connectivity.end(), {r0 + i, r0 + i1, r1 + i1, r1 + i});
+        tubes.offsets.push_back(static_cast<std::int64_t>(tubes.connectivity.size()));
+        tubes.types.push_back(kVtkQuad);
+      }
+    }
+  }
+
+  write_vtu_file(path(fmt::format("fibers_{:06d}.vtu", index)), tubes, time);
+  write_vtu_file(path(fmt::format("lines_{:06d}.vtu", index)), lines, time);
+}
+
+void OutputWriter::write_pvd(const std::string& name, const std::string& prefix) const {
+  std::string xml = "<?xml version=\"1.0\"?>\n";
+  xml += fmt::format("<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"{}\">\n",
+                     std::endian::native == std::endian::little ? "LittleEndian" : "BigEndian");
+  xml += "  <Collection>\n";
+  for (const auto& [time, index] : m_vtu_files)
+    xml += fmt::format("    <DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{}_{:06d}.vtu\"/>\n", time, prefix,
+                       index);
+  xml += "  </Collection>\n</VTKFile>\n";
+  write_atomic(path(name), [&](CheckedFile& f) { f.write(xml); });
+}
+
+void OutputWriter::write_nodes(const VecX& q) const {
+  check_state(q);
+  std::string text = "fiber,node,x,y,z,g1x,g1y,g1z,g2x,g2y,g2z\n";
+  for (const Fiber& fib : m_model.fibers) {
+    const std::string name = csv_field(fib.name);
+    for (Index j = 0; j < fib.num_nodes; ++j) {
+      const double* v = q.data() + kNodeDofs * (fib.first_node + j);
+      text += fmt::format("{},{},{},{},{},{},{},{},{},{},{}\n", name, j, v[0], v[1], v[2], v[3], v[4], v[5], v[6],
+                          v[7], v[8]);
+    }
+  }
+  write_atomic(path("nodes.csv"), [&](CheckedFile& f) { f.write(text); });
+}
+
+void OutputWriter::write_summary(const nlohmann::json& summary) const {
+  const std::string text = summary.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
+  write_atomic(path("summary.json"), [&](CheckedFile& f) { f.write(text); });
+}
+
+}  // namespace fibra

@@ -1,0 +1,70 @@
+#pragma once
+/// Run output: history.csv (one row per converged increment), nodes.csv, ParaView
+/// collections of tube surfaces and centroid lines (fibers.pvd / lines.pvd with one .vtu per
+/// written increment) and summary.json. Every write is checked; files that are rewritten
+/// (pvd, nodes.csv, summary.json) are replaced atomically. File formats: docs/outputs.md.
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "fibra/core/types.hpp"
+#include "fibra/model/model.hpp"
+
+namespace fibra {
+
+/// One converged increment, for history.csv.
+struct HistoryRow {
+  std::string step;          ///< step name
+  int step_index = 0;        ///< 0-based index of the step
+  int increment = 0;         ///< converged increment counter within the step
+  double load_factor = 0;    ///< load factor within the step, in (0, 1]
+  int iterations = 0;        ///< Newton iterations of this increment
+  double residual = 0;       ///< final (relative) residual norm
+  double wall_time = 0;      ///< wall-clock time since the start of the run [s]
+  std::vector<double> extra; ///< values of the extra columns, in the writer's order
+};
+
+/// Writes all output files of a run into one directory.
+class OutputWriter {
+ public:
+  /// Creates `dir` (and parents), opens history.csv with header: step,step_index,increment,load_factor,iterations,residual,wall_time, then the `extra_columns` names (e.g. reaction:beam:first:x).
+  OutputWriter(std::string dir, const Model& model, std::vector<std::string> extra_columns, int tube_sides);
+  /// Closes history.csv.
+  ~OutputWriter();
+  OutputWriter(const OutputWriter&) = delete;             ///< not copyable (owns a file)
+  OutputWriter& operator=(const OutputWriter&) = delete;  ///< not copyable (owns a file)
+
+  /// Appends a history row (flushed to disk at once) and, if write_vtu, writes fibers_NNNNNN.vtu and lines_NNNNNN.vtu and rewrites fibers.pvd / lines.pvd (timestep = load counter `time`) so the collections are valid after every increment.
+  void write_increment(const VecX& q, const HistoryRow& row, double time, bool write_vtu);
+  /// Writes nodes.csv for state q: columns fiber,node,x,y,z,g1x,g1y,g1z,g2x,g2y,g2z (fiber name, node index local to the fiber), full double precision.
+  void write_nodes(const VecX& q) const;
+  /// Writes summary.json (pretty-printed, atomically: write tmp then rename).
+  void write_summary(const nlohmann::json& summary) const;
+  /// The output directory.
+  const std::string& dir() const { return m_dir; }
+  /// Number of .vtu pairs written so far (the next file index).
+  int vtu_count() const { return static_cast<int>(m_vtu_files.size()); }
+
+ private:
+  struct FileCloser {
+    void operator()(std::FILE* f) const;
+  };
+  std::string path(const std::string& name) const;
+  void write_history_row(const HistoryRow& row);
+  void write_vtu(const VecX& q, int index, double time) const;
+  void write_pvd(const std::string& name, const std::string& prefix) const;
+  void check_state(const VecX& q) const;
+
+  std::string m_dir;
+  Model m_model;
+  std::vector<std::string> m_extra_columns;
+  int m_tube_sides = 12;
+  std::unique_ptr<std::FILE, FileCloser> m_history;
+  std::vector<std::pair<double, int>> m_vtu_files;  ///< (time, file index) of each written .vtu
+};
+
+}  // namespace fibra

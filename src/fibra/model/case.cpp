@@ -1,0 +1,24 @@
+#include "fibra/model/case.hpp"
+
+#include <cstdio>
+
+namespace fibra {
+
+std::string NodeRef::label() const {
+  switch (kind) {
+    case Kind::First:
+      return "first";
+    case Kind::Last:
+      return "last";
+    case Kind::Index:
+      return std::to_string(index);
+    case Kind::Fraction: {
+      char buffer[64];
+      std::snprintf(buffer, sizeof buffer, "at%g", fraction);
+      return buffer;
+    }
+  }
+  return "first";
+}
+
+}  // namespace fibra

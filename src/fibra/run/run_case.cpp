@@ -1,0 +1,73 @@
+#include "fibra/run/run_case.hpp"
+
+#include <omp.h>
+
+#include <chrono>
+#include <nlohmann/json.hpp>
+
+#include "fibra/io/output_writer.hpp"
+#include "fibra/model/model.hpp"
+
+namespace fibra {
+
+RunReport run_case(const Case& c, const RunOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (options.threads > 0) omp_set_num_threads(options.threads);
+  const Model model = build_model(c);
+  StaticSolver solver(c, model);
+  if (options.progress) solver.set_progress(options.progress);
+  OutputWriter writer(options.out_dir, model, solver.reaction_columns(), c.output.tube_sides);
+  double time_output = 0.0;
+  auto observer = [&](const IncrementInfo& info, const VecX& q) {
+    const auto t = std::chrono::steady_clock::now();
+    HistoryRow row{info.step, info.step_index, info.increment, info.load_factor, info.iterations,
+                   info.residual, info.wall_time, info.reactions};
+    const bool vtu = info.step_end || info.total_increments % c.output.every == 0;
+    writer.write_increment(q, row, info.step_index + info.load_factor, vtu);
+    time_output += std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
+  // Initial (reference) state as increment 0 in the ParaView collection.
+  writer.write_increment(model.reference, HistoryRow{"initial", -1, 0, 0.0, 0, 0.0, 0.0,
+                                                     std::vector<double>(solver.reaction_columns().size(), 0.0)},
+                         0.0, true);
+  RunReport report;
+  report.result = solver.run(observer);
+  report.stats = solver.stats();
+  report.final_state = solver.state();
+  report.fibers = static_cast<Index>(model.fibers.size());
+  report.nodes = model.num_nodes();
+  report.dofs = model.num_dofs();
+  report.elements = static_cast<Index>(model.elements.size());
+  writer.write_nodes(solver.state());
+  report.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  const SolverStats& s = report.stats;
+  nlohmann::json j;
+  j["case"] = c.file;
+  j["title"] = c.title;
+  j["status"] = report.result.status_name();
+  j["converged"] = report.result.status == RunResult::Status::Converged;
+  j["message"] = report.result.message;
+  if (report.result.status != RunResult::Status::Converged)
+    j["stopped_at"] = {{"step", report.result.step},
+                       {"load_factor", report.result.load_factor},
+                       {"attempted_load_factor", report.result.attempted_load_factor},
+                       {"residual_history", report.result.residual_history}};
+  j["counts"] = {{"fibers", report.fibers}, {"nodes", report.nodes}, {"dofs", report.dofs},
+                 {"elements", report.elements}};
+  j["timings"] = {{"total", report.wall_time}, {"assembly", s.time_assembly},
+                  {"factorization", s.time_factorization}, {"solve", s.time_solve}, {"output", time_output}};
+  j["solver"] = {{"linear_solver", c.solver.linear_solver},
+                 {"threads", omp_get_max_threads()},
+                 {"increments", s.increments},
+                 {"iterations", s.iterations},
+                 {"cuts", s.cuts},
+                 {"factorizations", s.factorizations},
+                 {"regularized_factorizations", s.regularized_factorizations},
+                 {"line_search_trials", s.line_search_trials},
+                 {"factor_nonzeros", s.factor_nonzeros}};
+  writer.write_summary(j);
+  return report;
+}
+
+}  // namespace fibra

@@ -1,0 +1,339 @@
+#include "fibra/solver/static_solver.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fmt/format.h>
+#include <map>
+
+#include "fibra/core/error.hpp"
+
+namespace fibra {
+
+std::atomic<bool>& interrupt_flag() {
+  static std::atomic<bool> flag{false};
+  return flag;
+}
+
+std::string RunResult::status_name() const {
+  switch (status) {
+    case Status::Converged: return "converged";
+    case Status::Failed: return "failed";
+    case Status::Interrupted: return "interrupted";
+  }
+  return "failed";
+}
+
+/// Loads and prescribed values of the current step, as start/end pairs ramped by lambda.
+struct StaticSolver::Program {
+  VecX force_start, force_end;                      // per dof
+  std::map<Index, std::pair<Vec3, Vec3>> moments;   // node -> (start, end)
+  std::map<Index, std::pair<double, double>> disp;  // dof -> (start, end) of u = q - ref
+  std::vector<char> fix_mask;                       // [[fix]] dofs (held at reference)
+  std::vector<std::vector<std::pair<Index, int>>> load_nodes;  // per step: resolved (node, entry)
+};
+
+namespace {
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+StaticSolver::StaticSolver(const Case& c, const Model& model)
+    : m_case(c), m_model(model), m_problem(std::make_unique<Problem>(model)),
+      m_linear(make_linear_solver(c.solver.linear_solver)), m_program(std::make_unique<Program>()),
+      m_q(model.reference) {
+  const Index n = model.num_dofs();
+  m_program->force_start = m_program->force_end = VecX::Zero(n);
+  m_program->fix_mask.assign(n, 0);
+  for (size_t i = 0; i < c.fixes.size(); ++i) {
+    const FixSpec& f = c.fixes[i];
+    const Index node = model.node_index(f.node, c.file, fmt::format("fix[{}]", i));
+    for (int k = 0; k < 9; ++k)
+      if ((k < 3 && f.position) || (k >= 3 && f.sections)) m_program->fix_mask[9 * node + k] = 1;
+    const std::string label = fmt::format("reaction:{}:{}", f.node.fiber, f.node.label());
+    if (std::find(m_reaction_columns.begin(), m_reaction_columns.end(), label + ":x") == m_reaction_columns.end()) {
+      for (const char* axis : {"x", "y", "z"}) m_reaction_columns.push_back(label + ":" + axis);
+      m_reaction_nodes.push_back(node);
+    }
+  }
+  for (size_t s = 0; s < c.steps.size(); ++s) {
+    const StepSpec& st = c.steps[s];
+    for (size_t i = 0; i < st.loads.size(); ++i)
+      model.node_index(st.loads[i].node, c.file, fmt::format("step[{}].load[{}]", s, i));
+    for (size_t i = 0; i < st.displacements.size(); ++i) {
+      const NodeRef& ref = st.displacements[i].node;
+      const Index node = model.node_index(ref, c.file, fmt::format("step[{}].displacement[{}]", s, i));
+      const std::string label = fmt::format("reaction:{}:{}", ref.fiber, ref.label());
+      if (std::find(m_reaction_columns.begin(), m_reaction_columns.end(), label + ":x") == m_reaction_columns.end()) {
+        for (const char* axis : {"x", "y", "z"}) m_reaction_columns.push_back(label + ":" + axis);
+        m_reaction_nodes.push_back(node);
+      }
+    }
+  }
+  m_force_scale = VecX::Ones(n);
+  m_length_scale = VecX::Ones(n);
+  for (const Fiber& f : model.fibers) {
+    const Section& sec = model.sections[f.section];
+    const double r = std::sqrt(sec.a * sec.b);
+    for (Index k = 0; k < f.num_nodes; ++k)
+      for (int d = 3; d < 9; ++d) {
+        m_force_scale[9 * (f.first_node + k) + d] = 1.0 / r;
+        m_length_scale[9 * (f.first_node + k) + d] = r;
+      }
+  }
+  m_linear->analyze(m_problem->pattern());
+}
+
+StaticSolver::~StaticSolver() = default;
+
+void StaticSolver::apply(int step, double lambda) {
+  Program& p = *m_program;
+  m_problem->forces() = p.force_start + lambda * (p.force_end - p.force_start);
+  auto& moments = m_problem->moments();
+  moments.clear();
+  for (const auto& [node, se] : p.moments) moments.push_back({node, se.first + lambda * (se.second - se.first)});
+  std::vector<char>& fixed = m_problem->fixed();
+  fixed = p.fix_mask;
+  for (Index d = 0; d < m_q.size(); ++d)
+    if (fixed[d]) m_q[d] = m_model.reference[d];
+  for (const auto& [dof, se] : p.disp) {
+    fixed[dof] = 1;
+    m_q[dof] = m_model.reference[dof] + se.first + lambda * (se.second - se.first);
+  }
+}
+
+std::vector<double> StaticSolver::reactions(const VecX& gradient) const {
+  std::vector<double> out;
+  out.reserve(3 * m_reaction_nodes.size());
+  for (Index node : m_reaction_nodes)
+    for (int k = 0; k < 3; ++k) out.push_back(gradient[9 * node + k]);
+  return out;
+}
+
+bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>& history, int& iterations,
+                                   double& residual) {
+  const SolverSpec& opt = m_case.solver;
+  apply(step, lambda);
+  const std::vector<char>& fixed = m_problem->fixed();
+  const Index n = m_q.size();
+  VecX r(n), dq(n), trial(n), g_trial(n);
+  const double length = m_model.length_scale;
+  double last_step = std::numeric_limits<double>::infinity();
+  // Floor for the reference force: a tiny fraction of the stiffest axial stiffness.
+  double force_floor = 0.0;
+  for (const Fiber& f : m_model.fibers)
+    force_floor = std::max(force_floor, m_model.materials[f.material].young * m_model.sections[f.section].area);
+  force_floor *= 1e-12;
+
+  m_problem->evaluate(m_q, &m_gradient, &m_hessian);
+  for (iterations = 0;; ++iterations) {
+    if (interrupt_flag().load()) return false;
+    // Residual on free dofs and reference force (external loads and reactions).
+    double ext = 0.0, react = 0.0, res = 0.0;
+    for (Index d = 0; d < n; ++d) {
+      const double s = m_force_scale[d];
+      if (fixed[d]) {
+        react += (s * m_gradient[d]) * (s * m_gradient[d]);
+        r[d] = 0.0;
+      } else {
+        r[d] = m_gradient[d];
+        res += (s * r[d]) * (s * r[d]);
+      }
+      ext += (s * m_problem->forces()[d]) * (s * m_problem->forces()[d]);
+    }
+    const double fref = std::max({std::sqrt(ext), std::sqrt(react), force_floor});
+    residual = std::sqrt(res) / fref;
+    history.push_back(residual);
+    if (std::getenv("FIBRA_TRACE")) fmt::print(stderr, "  it {} res {:.3e} step {:.3e}\n", iterations, residual, last_step);
+    if (!std::isfinite(residual)) return false;
+    const bool small_step = last_step <= opt.displacement_tolerance * length;
+    if (residual <= opt.residual_tolerance && (small_step || (iterations == 0 && residual == 0.0))) return true;
+    if (residual <= opt.residual_tolerance * 1e-3) return true;  // exact enough whatever the step
+    if (iterations >= opt.max_iterations) return false;
+    if (iterations >= 4 && residual > 1e6 * history.front() && history.front() > 0) return false;
+
+    // Factorize (shifted if the tangent is not positive definite) and solve H dq = -r.
+    auto t0 = std::chrono::steady_clock::now();
+    double mean_diag = 0.0;
+    for (Index d = 0; d < n; ++d) mean_diag += std::abs(m_hessian[m_problem->pattern().col_ptr()[d + 1] - 1]);
+    mean_diag /= std::max<Index>(n, 1);
+    double shift = 0.0;
+    FactorStatus st = m_linear->factorize(m_hessian, shift);
+    ++m_stats.factorizations;
+    while (st == FactorStatus::NotPositiveDefinite && shift < mean_diag) {
+      shift = shift == 0.0 ? 1e-10 * mean_diag : shift * 100.0;
+      st = m_linear->factorize(m_hessian, shift);
+      ++m_stats.factorizations;
+      ++m_stats.regularized_factorizations;
+    }
+    m_stats.time_factorization += seconds_since(t0);
+    m_stats.factor_nonzeros = m_linear->factor_nonzeros();
+    if (st != FactorStatus::Ok) return false;
+    t0 = std::chrono::steady_clock::now();
+    m_linear->solve(-r, dq);
+    for (Index d = 0; d < n; ++d)
+      if (fixed[d]) dq[d] = 0.0;
+    m_stats.time_solve += seconds_since(t0);
+    ++m_stats.iterations;
+
+    // Line search on s(alpha) = dq . r(q + alpha dq) (Crisfield): accept alpha = 1 unless the
+    // slope reverses strongly; then regula falsi on the bracket.
+    const double s0 = dq.dot(r);
+    double alpha = 1.0;
+    trial = m_q + dq;
+    m_problem->evaluate(trial, &m_gradient, &m_hessian);
+    if (opt.line_search && s0 < 0.0) {
+      auto slope = [&](const VecX& grad) {
+        double s = 0.0;
+        for (Index d = 0; d < n; ++d)
+          if (!fixed[d]) s += dq[d] * grad[d];
+        return s;
+      };
+      double s1 = slope(m_gradient);
+      if (!std::isfinite(s1) || (s1 > 0.0 && std::abs(s1) > 0.8 * std::abs(s0))) {
+        double a_lo = 0.0, s_lo = s0, a_hi = 1.0, s_hi = std::isfinite(s1) ? s1 : 1e300;
+        for (int k = 0; k < 6; ++k) {
+          alpha = std::clamp(a_lo - s_lo * (a_hi - a_lo) / (s_hi - s_lo), a_lo + 0.05 * (a_hi - a_lo),
+                             a_hi - 0.05 * (a_hi - a_lo));
+          if (!std::isfinite(s_hi) || s_hi > 1e299) alpha = 0.5 * (a_lo + a_hi);
+          trial = m_q + alpha * dq;
+          m_problem->evaluate(trial, &g_trial, nullptr);
+          ++m_stats.line_search_trials;
+          const double sa = slope(g_trial);
+          if (std::abs(sa) <= 0.8 * std::abs(s0)) break;
+          if (sa < 0.0) {
+            a_lo = alpha;
+            s_lo = sa;
+          } else {
+            a_hi = alpha;
+            s_hi = sa;
+          }
+        }
+        trial = m_q + alpha * dq;
+        m_problem->evaluate(trial, &m_gradient, &m_hessian);
+      }
+    }
+    m_q = trial;
+    last_step = 0.0;
+    for (Index d = 0; d < n; ++d) last_step = std::max(last_step, std::abs(alpha * dq[d]) * m_length_scale[d]);
+  }
+}
+
+RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const VecX&)>& observer) {
+  const auto t_start = std::chrono::steady_clock::now();
+  RunResult result;
+  Program& p = *m_program;
+  const SolverSpec& opt = m_case.solver;
+  int total = 0;
+  for (size_t s = 0; s < m_case.steps.size(); ++s) {
+    const StepSpec& st = m_case.steps[s];
+    const int step = static_cast<int>(s);
+    // Start values: where the previous step ended. End values: listed entries replace.
+    p.force_start = p.force_end;
+    std::map<Index, Vec3> moment_end;
+    for (auto& [node, se] : p.moments) moment_end[node] = se.second;
+    std::map<Index, std::pair<Vec3, Vec3>> moments;
+    for (auto& [node, m] : moment_end) moments[node] = {m, m};
+    std::map<Index, Vec3> listed_force, listed_moment;
+    for (size_t i = 0; i < st.loads.size(); ++i) {
+      const Index node = m_model.node_index(st.loads[i].node, m_case.file, fmt::format("step[{}].load[{}]", s, i));
+      // Vec3 has no zero default: start each listed node explicitly at zero.
+      listed_force.try_emplace(node, Vec3::Zero()).first->second += st.loads[i].force;
+      listed_moment.try_emplace(node, Vec3::Zero()).first->second += st.loads[i].moment;
+    }
+    for (auto& [node, f] : listed_force) p.force_end.segment<3>(9 * node) = f;
+    for (auto& [node, m] : listed_moment) {
+      auto it = moments.find(node);
+      const Vec3 start = it == moments.end() ? Vec3::Zero() : it->second.first;
+      moments[node] = {start, m};
+    }
+    p.moments = moments;
+    std::map<Index, std::pair<double, double>> disp;
+    for (auto& [dof, se] : p.disp) disp[dof] = {se.second, se.second};
+    for (size_t i = 0; i < st.displacements.size(); ++i) {
+      const DisplacementSpec& ds = st.displacements[i];
+      const Index node = m_model.node_index(ds.node, m_case.file, fmt::format("step[{}].displacement[{}]", s, i));
+      for (int k = 0; k < 3; ++k) {
+        const Index dof = 9 * node + k;
+        if (!ds.value[k]) {
+          disp.erase(dof);
+          continue;
+        }
+        const double start = m_q[dof] - m_model.reference[dof];
+        disp[dof] = {start, *ds.value[k]};
+      }
+    }
+    p.disp = disp;
+
+    const double nominal = 1.0 / st.increments;
+    const int max_increments = st.max_increments > 0 ? st.max_increments : 100 * st.increments;
+    double lambda = 0.0, dl = nominal;
+    int done = 0, attempts = 0;
+    while (lambda < 1.0 - 1e-12) {
+      dl = std::min(dl, 1.0 - lambda);
+      const VecX saved = m_q;
+      std::vector<double> history;
+      int iterations = 0;
+      double residual = 0.0;
+      const bool ok = solve_increment(step, lambda + dl, history, iterations, residual);
+      ++attempts;
+      if (interrupt_flag().load()) {
+        m_q = saved;
+        result.status = RunResult::Status::Interrupted;
+        result.message = "interrupted by the user";
+        result.step = st.name;
+        result.load_factor = lambda;
+        result.attempted_load_factor = lambda + dl;
+        return result;
+      }
+      if (!ok) {
+        m_q = saved;
+        ++m_stats.cuts;
+        const int cuts_here = static_cast<int>(std::round(std::log2(nominal / dl)));
+        if (cuts_here >= opt.max_cuts || attempts >= max_increments) {
+          result.status = RunResult::Status::Failed;
+          result.step = st.name;
+          result.load_factor = lambda;
+          result.attempted_load_factor = lambda + dl;
+          result.residual_history = history;
+          result.message = fmt::format(
+              "step \"{}\": the increment from load factor {:.6g} to {:.6g} did not converge after {} cuts "
+              "({} Newton iterations, last relative residual {:.3e}, tolerance {:.1e})",
+              st.name, lambda, lambda + dl, cuts_here, iterations, history.empty() ? 0.0 : history.back(),
+              opt.residual_tolerance);
+          return result;
+        }
+        dl *= 0.5;
+        continue;
+      }
+      lambda += dl;
+      if (1.0 - lambda < 1e-12) lambda = 1.0;
+      ++done;
+      ++total;
+      ++m_stats.increments;
+      IncrementInfo info;
+      info.step = st.name;
+      info.step_index = step;
+      info.increment = done;
+      info.total_increments = total;
+      info.load_factor = lambda;
+      info.iterations = iterations;
+      info.residual = residual;
+      info.wall_time = seconds_since(t_start);
+      info.step_end = lambda >= 1.0;
+      info.reactions = reactions(m_gradient);
+      m_stats.time_assembly = m_problem->times().assembly;
+      if (m_progress)
+        m_progress(fmt::format("step {} \"{}\"  load {:6.4f}  iterations {:2d}  residual {:.2e}  {:7.2f} s", step + 1,
+                               st.name, lambda, iterations, residual, info.wall_time));
+      observer(info, m_q);
+      // Grow after easy convergence, back towards the requested increment size.
+      if (iterations <= 4) dl = std::min(nominal, dl * 1.5);
+    }
+  }
+  m_stats.time_assembly = m_problem->times().assembly;
+  return result;
+}
+
+}  // namespace fibra

@@ -1,0 +1,98 @@
+#pragma once
+/// Quasi-static solution of a case: steps of linearly ramped loads and prescribed
+/// displacements, adaptive load increments, Newton–Raphson with a line search.
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fibra/model/case.hpp"
+#include "fibra/model/model.hpp"
+#include "fibra/solver/linear_solver.hpp"
+#include "fibra/solver/problem.hpp"
+
+namespace fibra {
+
+/// A converged increment, as reported to observers.
+struct IncrementInfo {
+  std::string step;            ///< step name
+  int step_index = 0;          ///< 0-based
+  int increment = 0;           ///< converged increments so far in this step (1-based)
+  int total_increments = 0;    ///< converged increments since the start of the run
+  double load_factor = 0;      ///< in [0, 1] within the step
+  int iterations = 0;          ///< Newton iterations of this increment
+  double residual = 0;         ///< final relative residual
+  double wall_time = 0;        ///< since the start of the run [s]
+  bool step_end = false;       ///< last increment of its step
+  std::vector<double> reactions;  ///< per reaction column (see reaction_columns())
+};
+
+/// Counters and timings of a run.
+struct SolverStats {
+  int increments = 0;
+  int iterations = 0;
+  int cuts = 0;
+  int factorizations = 0;
+  int regularized_factorizations = 0;
+  int line_search_trials = 0;
+  double time_assembly = 0;
+  double time_factorization = 0;
+  double time_solve = 0;
+  double factor_nonzeros = 0;
+};
+
+/// Outcome of a run.
+struct RunResult {
+  enum class Status { Converged, Failed, Interrupted } status = Status::Converged;
+  std::string message;                 ///< why it stopped (empty when converged)
+  std::string step;                    ///< step where it stopped
+  double load_factor = 0;              ///< last converged load factor in that step
+  double attempted_load_factor = 0;    ///< load factor of the failed attempt
+  std::vector<double> residual_history;  ///< relative residuals of the last failed attempt
+  std::string status_name() const;     ///< "converged", "failed", "interrupted"
+};
+
+/// Set to request a clean stop (e.g. from a SIGINT handler); checked every iteration.
+std::atomic<bool>& interrupt_flag();
+
+/// Runs the steps of a case on its model.
+class StaticSolver {
+ public:
+  /// Resolves constraints and loads of `c` against `model` (throws InputError on bad refs).
+  StaticSolver(const Case& c, const Model& model);
+  ~StaticSolver();
+
+  /// Solves every step; calls `observer` after each converged increment.
+  RunResult run(const std::function<void(const IncrementInfo&, const VecX&)>& observer);
+
+  const VecX& state() const { return m_q; }                        ///< current nodal values
+  const SolverStats& stats() const { return m_stats; }             ///< counters and timings
+  const std::vector<std::string>& reaction_columns() const { return m_reaction_columns; }  ///< names
+  Problem& problem() { return *m_problem; }                        ///< the assembled problem
+  /// Progress callback (one line per increment); default none.
+  void set_progress(std::function<void(const std::string&)> progress) { m_progress = std::move(progress); }
+
+ private:
+  struct Program;  // resolved loads and displacements per step
+  bool solve_increment(int step, double lambda, std::vector<double>& history, int& iterations, double& residual);
+  void apply(int step, double lambda);
+  std::vector<double> reactions(const VecX& gradient) const;
+
+  const Case& m_case;
+  const Model& m_model;
+  std::unique_ptr<Problem> m_problem;
+  std::unique_ptr<LinearSolver> m_linear;
+  std::unique_ptr<Program> m_program;
+  VecX m_q;
+  VecX m_gradient;
+  std::vector<double> m_hessian;
+  VecX m_force_scale;   // residual weights: 1 on x0, 1/radius on g
+  VecX m_length_scale;  // increment weights: 1 on x0, radius on g
+  std::vector<std::string> m_reaction_columns;
+  std::vector<Index> m_reaction_nodes;
+  SolverStats m_stats;
+  std::function<void(const std::string&)> m_progress;
+};
+
+}  // namespace fibra
