@@ -61,6 +61,12 @@ int run(const std::string& path, std::string out, int threads) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // OpenMP threads that spin after a parallel region starve CHOLMOD's BLAS threads on small
+  // machines; libgomp reads its wait policy at load time, so set it and start again.
+  if (std::getenv("OMP_WAIT_POLICY") == nullptr) {
+    setenv("OMP_WAIT_POLICY", "passive", 1);
+    execv("/proc/self/exe", argv);
+  }
   CLI::App app{"fibra: woven fabrics and fiber assemblies simulated at the scale of their fibers"};
   app.require_subcommand(1);
   std::string case_path, out;

@@ -1,6 +1,7 @@
 #include "fibra/solver/nodal_load.hpp"
 
 #include <Eigen/Geometry>
+#include <cmath>
 
 namespace fibra {
 
@@ -26,6 +27,25 @@ Vec6 moment_generalized_force(const Vec3& moment, const Vec3& rg1, const Vec3& r
     if (dforce) dforce->block<3, 3>(3 * a, 3 * a) = mag * w[a] * (skew / rho2 - 2.0 * np * p.transpose() / (rho2 * rho2));
   }
   return f;
+}
+
+double moment_work(const Vec3& moment, const Vec3& rg1, const Vec3& rg2, const Vec3& h1, const Vec3& h2,
+                   const Vec3& g1, const Vec3& g2) {
+  const double mag = moment.norm();
+  if (mag == 0.0) return 0.0;
+  const Vec3 n = moment / mag;
+  const Mat3 proj = Mat3::Identity() - n * n.transpose();
+  const double p1 = (proj * rg1).squaredNorm(), p2 = (proj * rg2).squaredNorm();
+  const double w[2] = {p1 / (p1 + p2), p2 / (p1 + p2)};
+  const Vec3* from[2] = {&h1, &h2};
+  const Vec3* to[2] = {&g1, &g2};
+  double work = 0.0;
+  for (int a = 0; a < 2; ++a) {
+    if (w[a] == 0.0) continue;
+    const Vec3 u = proj * (*from[a]), v = proj * (*to[a]);
+    work += mag * w[a] * std::atan2(n.dot(u.cross(v)), u.dot(v));
+  }
+  return work;
 }
 
 }  // namespace fibra

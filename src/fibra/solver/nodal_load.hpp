@@ -19,4 +19,9 @@ using Mat6x6 = Eigen::Matrix<double, 6, 6>;
 Vec6 moment_generalized_force(const Vec3& moment, const Vec3& rg1, const Vec3& rg2, const Vec3& g1,
                               const Vec3& g2, Mat6x6* dforce);
 
+/// Work of moment `moment` when the section vectors turn from (h1, h2) to (g1, g2): the
+/// weighted angles swept about the moment axis (valid for turns below pi). [J]
+double moment_work(const Vec3& moment, const Vec3& rg1, const Vec3& rg2, const Vec3& h1, const Vec3& h2,
+                   const Vec3& g1, const Vec3& g2);
+
 }  // namespace fibra

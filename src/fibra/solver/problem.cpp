@@ -46,9 +46,12 @@ double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hes
   // Dead forces: potential -f . (q - q_ref).
   energy -= m_forces.dot(q - model.reference);
   if (gradient) *gradient -= m_forces;
-  // Moments on section vectors (conservative about their axis; energy not tracked).
+  // Moments on section vectors (conservative about their axis; work from the energy base).
+  const VecX& base = m_energy_base.size() == q.size() ? m_energy_base : model.reference;
   for (const NodalMoment& m : m_moments) {
     const Index d = kNodeDofs * m.node;
+    energy -= moment_work(m.moment, model.reference.segment<3>(d + 3), model.reference.segment<3>(d + 6),
+                          base.segment<3>(d + 3), base.segment<3>(d + 6), q.segment<3>(d + 3), q.segment<3>(d + 6));
     Mat6x6 df;
     const Vec6 f = moment_generalized_force(m.moment, model.reference.segment<3>(d + 3), model.reference.segment<3>(d + 6),
                                             q.segment<3>(d + 3), q.segment<3>(d + 6), hessian ? &df : nullptr);

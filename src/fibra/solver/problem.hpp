@@ -35,6 +35,9 @@ class Problem {
   std::vector<NodalMoment>& moments() { return m_moments; }      ///< nodal moments
   const AssemblyTimes& times() const { return m_times; }         ///< accumulated timings
 
+  /// Sets the state from which moment work is measured in evaluate()'s energy (moment
+  /// potentials are only defined up to whole turns, so energies are compared near this state).
+  void set_energy_base(const VecX& q) { m_energy_base = q; }
   /// Total potential energy at q; fills the gradient of Pi on every dof (f_int - f_ext) and
   /// the Hessian values (free-free block; eliminated dofs get a unit-scaled diagonal).
   double evaluate(const VecX& q, VecX* gradient, std::vector<double>* hessian);
@@ -47,6 +50,7 @@ class Problem {
   VecX m_forces;
   std::vector<NodalMoment> m_moments;
   std::vector<double> m_energy_buffer;
+  VecX m_energy_base;
   std::vector<Index> m_diagonal;  // value index of each diagonal entry
   AssemblyTimes m_times;
 };

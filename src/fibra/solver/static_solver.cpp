@@ -117,7 +117,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   apply(step, lambda);
   const std::vector<char>& fixed = m_problem->fixed();
   const Index n = m_q.size();
-  VecX r(n), dq(n), trial(n), g_trial(n);
+  VecX r(n), dq(n), trial(n);
   const double length = m_model.length_scale;
   double last_step = std::numeric_limits<double>::infinity();
   // Floor for the reference force: a tiny fraction of the stiffest axial stiffness.
@@ -145,7 +145,6 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     const double fref = std::max({std::sqrt(ext), std::sqrt(react), force_floor});
     residual = std::sqrt(res) / fref;
     history.push_back(residual);
-    if (std::getenv("FIBRA_TRACE")) fmt::print(stderr, "  it {} res {:.3e} step {:.3e}\n", iterations, residual, last_step);
     if (!std::isfinite(residual)) return false;
     const bool small_step = last_step <= opt.displacement_tolerance * length;
     if (residual <= opt.residual_tolerance && (small_step || (iterations == 0 && residual == 0.0))) return true;
@@ -177,43 +176,30 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     m_stats.time_solve += seconds_since(t0);
     ++m_stats.iterations;
 
-    // Line search on s(alpha) = dq . r(q + alpha dq) (Crisfield): accept alpha = 1 unless the
-    // slope reverses strongly; then regula falsi on the bracket.
+    // Full Newton steps while the residual falls. Linearized rotations stretch the section
+    // vectors, so a good step can raise the energy for one iteration: the backtracking line
+    // search (Armijo, on the total potential compared from the current state) is a safeguard
+    // used only once the residual stops decreasing after a few iterations.
+    const size_t k = history.size();
+    const bool stalled = k >= 4 && history[k - 1] > history[k - 2];
+    m_problem->set_energy_base(m_q);
     const double s0 = dq.dot(r);
     double alpha = 1.0;
     trial = m_q + dq;
-    m_problem->evaluate(trial, &m_gradient, &m_hessian);
-    if (opt.line_search && s0 < 0.0) {
-      auto slope = [&](const VecX& grad) {
-        double s = 0.0;
-        for (Index d = 0; d < n; ++d)
-          if (!fixed[d]) s += dq[d] * grad[d];
-        return s;
-      };
-      double s1 = slope(m_gradient);
-      if (!std::isfinite(s1) || (s1 > 0.0 && std::abs(s1) > 0.8 * std::abs(s0))) {
-        double a_lo = 0.0, s_lo = s0, a_hi = 1.0, s_hi = std::isfinite(s1) ? s1 : 1e300;
-        for (int k = 0; k < 6; ++k) {
-          alpha = std::clamp(a_lo - s_lo * (a_hi - a_lo) / (s_hi - s_lo), a_lo + 0.05 * (a_hi - a_lo),
-                             a_hi - 0.05 * (a_hi - a_lo));
-          if (!std::isfinite(s_hi) || s_hi > 1e299) alpha = 0.5 * (a_lo + a_hi);
-          trial = m_q + alpha * dq;
-          m_problem->evaluate(trial, &g_trial, nullptr);
-          ++m_stats.line_search_trials;
-          const double sa = slope(g_trial);
-          if (std::abs(sa) <= 0.8 * std::abs(s0)) break;
-          if (sa < 0.0) {
-            a_lo = alpha;
-            s_lo = sa;
-          } else {
-            a_hi = alpha;
-            s_hi = sa;
-          }
-        }
+    if (opt.line_search && stalled && s0 < 0.0) {
+      const double e0 = m_problem->evaluate(m_q, nullptr, nullptr);
+      const double noise = 1e-11 * std::abs(e0) + 1e-14 * std::abs(s0);
+      double e1 = m_problem->evaluate(trial, nullptr, nullptr);
+      for (int k = 0; k < 8 && !(std::isfinite(e1) && e1 <= e0 + 1e-4 * alpha * s0 + noise); ++k) {
+        // Minimum of the quadratic through e0, slope s0 and e(alpha), kept in [0.1, 0.5] alpha.
+        const double a_q = std::isfinite(e1) ? -s0 * alpha * alpha / (2.0 * (e1 - e0 - s0 * alpha)) : 0.1 * alpha;
+        alpha = std::clamp(a_q, 0.1 * alpha, 0.5 * alpha);
         trial = m_q + alpha * dq;
-        m_problem->evaluate(trial, &m_gradient, &m_hessian);
+        e1 = m_problem->evaluate(trial, nullptr, nullptr);
+        ++m_stats.line_search_trials;
       }
     }
+    m_problem->evaluate(trial, &m_gradient, &m_hessian);
     m_q = trial;
     last_step = 0.0;
     for (Index d = 0; d < n; ++d) last_step = std::max(last_step, std::abs(alpha * dq[d]) * m_length_scale[d]);
