@@ -197,8 +197,8 @@ void expect_same_case(const Case& a, const Case& b) {
   ASSERT_EQ(a.fixes.size(), b.fixes.size());
   for (std::size_t i = 0; i < a.fixes.size(); ++i) {
     expect_same_node(a.fixes[i].node, b.fixes[i].node);
-    EXPECT_EQ(a.fixes[i].position, b.fixes[i].position);
-    EXPECT_EQ(a.fixes[i].sections, b.fixes[i].sections);
+    EXPECT_EQ(a.fixes[i].dofs, b.fixes[i].dofs);
+    EXPECT_EQ(a.fixes[i].sections(), b.fixes[i].sections());
   }
   ASSERT_EQ(a.steps.size(), b.steps.size());
   for (std::size_t i = 0; i < a.steps.size(); ++i) {
@@ -315,16 +315,16 @@ TEST(CaseReader, ParsesEveryPartOfTheSchema) {
   ASSERT_EQ(c.fixes.size(), 3u);
   EXPECT_EQ(c.fixes[0].node.fiber, "beam");
   EXPECT_EQ(c.fixes[0].node.kind, NodeRef::Kind::First);
-  EXPECT_TRUE(c.fixes[0].position);
-  EXPECT_TRUE(c.fixes[0].sections);
+  EXPECT_TRUE(c.fixes[0].position());
+  EXPECT_TRUE(c.fixes[0].sections());
   EXPECT_EQ(c.fixes[1].node.kind, NodeRef::Kind::Index);
   EXPECT_EQ(c.fixes[1].node.index, 0);
-  EXPECT_TRUE(c.fixes[1].position);
-  EXPECT_FALSE(c.fixes[1].sections);
+  EXPECT_TRUE(c.fixes[1].position());
+  EXPECT_FALSE(c.fixes[1].sections());
   EXPECT_EQ(c.fixes[2].node.kind, NodeRef::Kind::Fraction);
   EXPECT_DOUBLE_EQ(c.fixes[2].node.fraction, 0.5);
-  EXPECT_FALSE(c.fixes[2].position);
-  EXPECT_TRUE(c.fixes[2].sections);
+  EXPECT_FALSE(c.fixes[2].position());
+  EXPECT_TRUE(c.fixes[2].sections());
 
   ASSERT_EQ(c.steps.size(), 2u);
   const StepSpec& s0 = c.steps[0];
@@ -434,7 +434,7 @@ TEST(CaseReader, HandWrittenJson) {
   EXPECT_EQ(c.title, "pull");
   EXPECT_DOUBLE_EQ(c.materials[0].poisson, 0.25);
   EXPECT_DOUBLE_EQ(c.fibers[0].radius, std::sqrt(0.02 * 0.01));
-  EXPECT_TRUE(c.fixes[0].position && c.fixes[0].sections);  // dofs defaults to "all"
+  EXPECT_TRUE(c.fixes[0].position() && c.fixes[0].sections());  // dofs defaults to "all"
   EXPECT_EQ(c.steps[0].name, "step0");
   EXPECT_EQ(c.steps[0].increments, 4);
   EXPECT_EQ(c.steps[0].displacements[0].node.index, 6);
@@ -632,7 +632,7 @@ const std::vector<BadCase> kBadCases = {
     {"AtOutOfRange", "at = 0.5", "at = 1.5", "fix[2].at", "must be in [0, 1]"},
     {"AtNegative", "at = 1\n", "at = -0.25\n", "step[1].load[0].at", "must be in [0, 1]"},
     {"BadDofs", "dofs = \"all\"", "dofs = \"positions\"", "fix[0].dofs",
-     "expected \"all\", \"position\" or \"sections\", got \"positions\" (did you mean \"position\"?)"},
+     "expected \"all\", \"position\", \"sections\" or a list of components, got \"positions\" (did you mean \"position\"?)"},
 
     // Steps, loads, displacements.
     {"IncrementsZero", "increments = 10", "increments = 0", "step[0].increments", "must be >= 1"},
@@ -751,6 +751,44 @@ TEST(CaseReaderErrors, JsonSpecifics) {
   ASSERT_NE(at, std::string::npos) << huge;
   huge.replace(at, std::string("\"elements\" : 4").size(), "\"elements\" : 18446744073709551615");
   expect_json_error(huge, "fiber[0].elements", "expected an integer");
+}
+
+}  // namespace
+}  // namespace fibra
+
+namespace fibra {
+namespace {
+
+TEST(CaseReaderFixComponents, ListOfComponentsSelectsDofs) {
+  const std::string text = R"(
+[[material]]
+name = "m"
+young = 1e9
+poisson = 0.3
+[[fiber]]
+name = "f"
+material = "m"
+radius = 0.01
+points = [[0, 0, 0], [1, 0, 0]]
+elements = 2
+[[fix]]
+fiber = "f"
+node = "first"
+dofs = ["y", "g1", "g2z"]
+[[step]]
+increments = 1
+)";
+  const Case c = parse_case_toml(text, "fix.toml");
+  const std::array<bool, 9> expected{false, true, false, true, true, true, false, false, true};
+  EXPECT_EQ(c.fixes[0].dofs, expected);
+  EXPECT_FALSE(c.fixes[0].position());
+  const std::string bad = std::string(text).replace(text.find("\"g2z\""), 5, "\"g3\"");
+  try {
+    parse_case_toml(bad, "fix.toml");
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("fix[0].dofs[2]"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -820,21 +820,46 @@ FixSpec Reader::read_fix(const Value& t, const std::string& path,
   fix.node = read_node(t, path, fibers);
   if (const Value* v = find(t, "dofs")) {
     const std::string key = join(path, "dofs");
-    const std::string dofs = to_string(*v, key);
-    if (dofs == "all") {
-      fix.position = fix.sections = true;
-    } else if (dofs == "position") {
-      fix.position = true;
-      fix.sections = false;
-    } else if (dofs == "sections") {
-      fix.position = false;
-      fix.sections = true;
+    const auto set = [&](int from, int to, bool on) {
+      for (int k = from; k < to; ++k) fix.dofs[k] = on;
+    };
+    if (v->type == Value::Type::Array) {
+      // A list of components: x, y, z (of x0), g1, g2 (whole vectors) or g1x ... g2z.
+      const Keys words = {"x", "y", "z", "g1", "g2", "g1x", "g1y", "g1z", "g2x", "g2y", "g2z"};
+      set(0, 9, false);
+      if (v->items.empty()) fail(key, "expected a non-empty list of components", v);
+      for (std::size_t i = 0; i < v->items.size(); ++i) {
+        const std::string item_key = fmt::format("{}[{}]", key, i);
+        const std::string c = to_string(v->items[i], item_key);
+        const auto it = std::find(words.begin(), words.end(), c);
+        if (it == words.end())
+          fail(item_key,
+               fmt::format("expected one of x, y, z, g1, g2, g1x, g1y, g1z, g2x, g2y, g2z, got \"{}\"{}", c,
+                           did_you_mean(c, words)),
+               &v->items[i]);
+        const int w = static_cast<int>(it - words.begin());
+        if (w < 3) fix.dofs[w] = true;
+        else if (w == 3) set(3, 6, true);
+        else if (w == 4) set(6, 9, true);
+        else fix.dofs[w - 5 + 3] = true;
+      }
     } else {
-      const Keys words = {"all", "position", "sections"};
-      fail(key,
-           fmt::format("expected \"all\", \"position\" or \"sections\", got \"{}\"{}", dofs,
-                       did_you_mean(dofs, words)),
-           v);
+      const std::string dofs = to_string(*v, key);
+      if (dofs == "all") {
+        set(0, 9, true);
+      } else if (dofs == "position") {
+        set(0, 3, true);
+        set(3, 9, false);
+      } else if (dofs == "sections") {
+        set(0, 3, false);
+        set(3, 9, true);
+      } else {
+        const Keys words = {"all", "position", "sections"};
+        fail(key,
+             fmt::format("expected \"all\", \"position\", \"sections\" or a list of components, got \"{}\"{}",
+                         dofs, did_you_mean(dofs, words)),
+             v);
+      }
     }
   }
   return fix;

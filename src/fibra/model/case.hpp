@@ -64,8 +64,14 @@ struct NodeRef {
 /// A [[fix]] entry: dofs of one node held at their reference values.
 struct FixSpec {
   NodeRef node;
-  bool position = true;  ///< fix x0
-  bool sections = true;  ///< fix g1 and g2 (clamp)
+  /// Held components, in node order x0 (x, y, z), g1 (x, y, z), g2 (x, y, z); all = clamp.
+  std::array<bool, 9> dofs{true, true, true, true, true, true, true, true, true};
+  bool position() const { return dofs[0] && dofs[1] && dofs[2]; }  ///< x0 fully held
+  bool sections() const {                                          ///< g1 and g2 fully held
+    for (int k = 3; k < 9; ++k)
+      if (!dofs[k]) return false;
+    return true;
+  }
 };
 
 /// A nodal load (force on x0 and/or axial moment on the section vectors), total value at the
@@ -96,7 +102,7 @@ struct StepSpec {
 /// Nonlinear solver settings ([solver] table).
 struct SolverSpec {
   double residual_tolerance = 1e-8;      ///< relative to the reference force
-  double displacement_tolerance = 1e-10;  ///< relative to the model size
+  double displacement_tolerance = 1e-8;   ///< largest correction, relative to the model size
   int max_iterations = 25;               ///< Newton iterations per increment
   int max_cuts = 12;                     ///< successive halvings of an increment
   bool line_search = true;

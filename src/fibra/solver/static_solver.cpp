@@ -50,7 +50,7 @@ StaticSolver::StaticSolver(const Case& c, const Model& model)
     const FixSpec& f = c.fixes[i];
     const Index node = model.node_index(f.node, c.file, fmt::format("fix[{}]", i));
     for (int k = 0; k < 9; ++k)
-      if ((k < 3 && f.position) || (k >= 3 && f.sections)) m_program->fix_mask[9 * node + k] = 1;
+      if (f.dofs[k]) m_program->fix_mask[9 * node + k] = 1;
     const std::string label = fmt::format("reaction:{}:{}", f.node.fiber, f.node.label());
     if (std::find(m_reaction_columns.begin(), m_reaction_columns.end(), label + ":x") == m_reaction_columns.end()) {
       for (const char* axis : {"x", "y", "z"}) m_reaction_columns.push_back(label + ":" + axis);

@@ -1,0 +1,241 @@
+// One Newton iteration of a fiber bundle, piece by piece: a bundle of 480 straight parallel
+// glass fibers (radius 10 um, length 10 mm, 100 quadratic elements each, hexagonal grid, no
+// contact), first node of every fiber clamped, evaluated at the reference plus a small smooth
+// deformation.
+//
+//   BM_Assembly/threads:T         Problem::evaluate with gradient + Hessian, T OpenMP threads
+//   BM_AssemblyGradient/threads:T Problem::evaluate with gradient only (residual, line search)
+//   BM_CholmodAnalyze             symbolic analysis (METIS ordering, supernodes), once
+//   BM_CholmodFactorize/blas_threads:B  numeric supernodal LL^T with B OpenBLAS threads
+//   BM_CholmodSolve               forward/back substitution for one right-hand side
+//   BM_NewtonIteration/threads:2  assembly + factorization + solve (target < 1 s)
+//   BM_EigenFactorize/fibers:F    Eigen SimplicialLDLT numeric factorization (fallback)
+//   BM_EigenSolve/fibers:F        Eigen solve
+//
+// Run with OMP_WAIT_POLICY=passive (spinning OpenMP workers starve OpenBLAS threads).
+#include <benchmark/benchmark.h>
+#include <dlfcn.h>
+#include <omp.h>
+
+#include <map>
+#include <memory>
+
+#include "bench_common.hpp"
+#include "fibra/solver/linear_solver.hpp"
+
+namespace {
+
+using namespace fibra;
+
+constexpr int kFibers = 480;
+constexpr int kElements = 100;
+
+/// A bundle with its problem, deformed state, gradient and Hessian at that state.
+struct Bundle {
+  Case spec;
+  Model model;
+  std::unique_ptr<Problem> problem;
+  VecX q, gradient, residual;
+  std::vector<double> hessian;
+
+  explicit Bundle(int fibers) : spec(bench::bundle_case(fibers, kElements)), model(build_model(spec)) {
+    problem = std::make_unique<Problem>(model);
+    bench::fix_first_nodes(model, *problem);
+    q = bench::deformed_state(model, 1e-3);
+    bench::hold_fixed(model, *problem, q);
+    omp_set_num_threads(2);
+    problem->evaluate(q, &gradient, &hessian);
+    residual = gradient;
+    for (Index d = 0; d < residual.size(); ++d)
+      if (problem->fixed()[d]) residual[d] = 0.0;
+  }
+};
+
+Bundle& bundle(int fibers = kFibers) {
+  static std::map<int, std::unique_ptr<Bundle>> cache;
+  auto& b = cache[fibers];
+  if (!b) b = std::make_unique<Bundle>(fibers);
+  return *b;
+}
+
+/// A solver of the given kind, analysed once on the bundle's pattern (outside any timing).
+LinearSolver& analysed(const std::string& kind, int fibers = kFibers) {
+  static std::map<std::pair<std::string, int>, std::unique_ptr<LinearSolver>> cache;
+  auto& s = cache[{kind, fibers}];
+  if (!s) {
+    s = make_linear_solver(kind);
+    s->analyze(bundle(fibers).problem->pattern());
+  }
+  return *s;
+}
+
+void add_size_counters(benchmark::State& state, const Bundle& b) {
+  state.counters["elements"] = static_cast<double>(b.model.elements.size());
+  state.counters["dofs"] = static_cast<double>(b.model.num_dofs());
+  state.counters["nnz_A"] = static_cast<double>(b.problem->pattern().nonzeros());
+}
+
+// OpenBLAS thread count, looked up at run time (CHOLMOD reaches OpenBLAS through libblas.so.3,
+// which on Debian is the OpenBLAS pthread build; no link dependency needed here).
+using SetThreads = void (*)(int);
+using GetThreads = int (*)();
+SetThreads openblas_set() { return reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads")); }
+GetThreads openblas_get() { return reinterpret_cast<GetThreads>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads")); }
+
+// ---------------------------------------------------------------------------------------------
+
+void BM_Assembly(benchmark::State& state) {
+  Bundle& b = bundle();
+  const int threads = static_cast<int>(state.range(0));
+  omp_set_num_threads(threads);
+  VecX g;
+  std::vector<double> h;
+  for (auto _ : state) {
+    double e = b.problem->evaluate(b.q, &g, &h);
+    benchmark::DoNotOptimize(e);
+    benchmark::ClobberMemory();
+  }
+  const double elements = static_cast<double>(b.model.elements.size());
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(elements));
+  state.counters["elements_per_s_per_core"] =
+      benchmark::Counter(elements * static_cast<double>(state.iterations()) / threads, benchmark::Counter::kIsRate);
+  add_size_counters(state, b);
+  omp_set_num_threads(2);
+}
+BENCHMARK(BM_Assembly)->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+void BM_AssemblyGradient(benchmark::State& state) {
+  Bundle& b = bundle();
+  const int threads = static_cast<int>(state.range(0));
+  omp_set_num_threads(threads);
+  VecX g;
+  for (auto _ : state) {
+    double e = b.problem->evaluate(b.q, &g, nullptr);
+    benchmark::DoNotOptimize(e);
+    benchmark::ClobberMemory();
+  }
+  const double elements = static_cast<double>(b.model.elements.size());
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(elements));
+  state.counters["elements_per_s_per_core"] =
+      benchmark::Counter(elements * static_cast<double>(state.iterations()) / threads, benchmark::Counter::kIsRate);
+  omp_set_num_threads(2);
+}
+BENCHMARK(BM_AssemblyGradient)->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+void BM_CholmodAnalyze(benchmark::State& state) {
+  Bundle& b = bundle();
+  for (auto _ : state) {
+    std::unique_ptr<LinearSolver> s = make_linear_solver("cholmod");
+    s->analyze(b.problem->pattern());
+    benchmark::DoNotOptimize(s.get());
+  }
+  add_size_counters(state, b);
+}
+BENCHMARK(BM_CholmodAnalyze)->Iterations(1)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+void BM_CholmodFactorize(benchmark::State& state) {
+  Bundle& b = bundle();
+  LinearSolver& s = analysed("cholmod");
+  const int blas_threads = static_cast<int>(state.range(0));
+  SetThreads set = openblas_set();
+  GetThreads get = openblas_get();
+  if (!set || !get) {
+    state.SkipWithError("openblas_set_num_threads not found: CHOLMOD is not running on OpenBLAS");
+    return;
+  }
+  const int previous = get();
+  set(blas_threads);
+  omp_set_num_threads(2);
+  for (auto _ : state) {
+    FactorStatus st = s.factorize(b.hessian, 0.0);
+    if (st != FactorStatus::Ok) {
+      state.SkipWithError("factorization failed (matrix not positive definite?)");
+      break;
+    }
+  }
+  set(previous);
+  add_size_counters(state, b);
+  state.counters["nnz_L"] = s.factor_nonzeros();
+}
+BENCHMARK(BM_CholmodFactorize)->ArgName("blas_threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+void BM_CholmodSolve(benchmark::State& state) {
+  Bundle& b = bundle();
+  LinearSolver& s = analysed("cholmod");
+  if (s.factorize(b.hessian, 0.0) != FactorStatus::Ok) {
+    state.SkipWithError("factorization failed");
+    return;
+  }
+  const VecX rhs = -b.residual;
+  VecX x;
+  for (auto _ : state) {
+    s.solve(rhs, x);
+    benchmark::DoNotOptimize(x.data());
+  }
+  add_size_counters(state, b);
+}
+BENCHMARK(BM_CholmodSolve)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+void BM_NewtonIteration(benchmark::State& state) {
+  Bundle& b = bundle();
+  LinearSolver& s = analysed("cholmod");
+  const int threads = static_cast<int>(state.range(0));
+  omp_set_num_threads(threads);
+  VecX g, r, dq;
+  std::vector<double> h;
+  const std::vector<char>& fixed = b.problem->fixed();
+  for (auto _ : state) {
+    b.problem->evaluate(b.q, &g, &h);
+    r = g;
+    for (Index d = 0; d < r.size(); ++d)
+      if (fixed[d]) r[d] = 0.0;
+    if (s.factorize(h, 0.0) != FactorStatus::Ok) {
+      state.SkipWithError("factorization failed");
+      break;
+    }
+    s.solve(-r, dq);
+    for (Index d = 0; d < dq.size(); ++d)
+      if (fixed[d]) dq[d] = 0.0;
+    benchmark::DoNotOptimize(dq.data());
+  }
+  add_size_counters(state, b);
+  state.counters["nnz_L"] = s.factor_nonzeros();
+  omp_set_num_threads(2);
+}
+BENCHMARK(BM_NewtonIteration)->ArgName("threads")->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+void BM_EigenFactorize(benchmark::State& state) {
+  const int fibers = static_cast<int>(state.range(0));
+  Bundle& b = bundle(fibers);
+  LinearSolver& s = analysed("eigen", fibers);
+  for (auto _ : state) {
+    if (s.factorize(b.hessian, 0.0) != FactorStatus::Ok) {
+      state.SkipWithError("factorization failed");
+      break;
+    }
+  }
+  add_size_counters(state, b);
+}
+BENCHMARK(BM_EigenFactorize)->ArgName("fibers")->Arg(kFibers)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+void BM_EigenSolve(benchmark::State& state) {
+  const int fibers = static_cast<int>(state.range(0));
+  Bundle& b = bundle(fibers);
+  LinearSolver& s = analysed("eigen", fibers);
+  if (s.factorize(b.hessian, 0.0) != FactorStatus::Ok) {
+    state.SkipWithError("factorization failed");
+    return;
+  }
+  const VecX rhs = -b.residual;
+  VecX x;
+  for (auto _ : state) {
+    s.solve(rhs, x);
+    benchmark::DoNotOptimize(x.data());
+  }
+  add_size_counters(state, b);
+}
+BENCHMARK(BM_EigenSolve)->ArgName("fibers")->Arg(kFibers)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
