@@ -120,11 +120,13 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   VecX r(n), dq(n), trial(n);
   const double length = m_model.length_scale;
   double last_step = std::numeric_limits<double>::infinity();
-  // Floor for the reference force: a tiny fraction of the stiffest axial stiffness.
+  // Floor for the reference force: the force that strains the stiffest fiber by 1e-5. Round-off
+  // in the internal forces is about eps * E A per dof, so residuals relative to a smaller
+  // reference (an unloaded step) could never converge.
   double force_floor = 0.0;
   for (const Fiber& f : m_model.fibers)
     force_floor = std::max(force_floor, m_model.materials[f.material].young * m_model.sections[f.section].area);
-  force_floor *= 1e-12;
+  force_floor *= 1e-5;
 
   m_problem->evaluate(m_q, &m_gradient, &m_hessian);
   for (iterations = 0;; ++iterations) {
