@@ -59,7 +59,7 @@ Sample make_sample(const MaterialSpec& mat, bool curved, double radius = 0.05) {
     s.ref.segment<3>(9 * a + 6) = frames[a].g2;
   }
   s.section = make_section(mat, radius, radius * (curved ? 0.7 : 1.0));
-  s.element.gauss = beam_reference(s.ref.data());
+  beam_reference(s.ref.data(), s.element);
   return s;
 }
 

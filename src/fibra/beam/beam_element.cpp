@@ -19,6 +19,48 @@ struct Feed {
 constexpr Feed kFeeds[3] = {{1, {0, 0}, {1, 0}}, {2, {1, 3}, {0, 1}}, {2, {2, 4}, {0, 1}}};
 
 const double kGaussEta[kBeamGauss] = {-0.57735026918962576, 0.57735026918962576};
+// In-section dot products (g1.g1, g2.g2, g1.g2) of node a.
+Eigen::Vector3d nodal_section(const double* q, int a) {
+  const Eigen::Map<const Vec3> g1(q + 9 * a + 3), g2(q + 9 * a + 6);
+  return {g1.dot(g1), g2.dot(g2), g1.dot(g2)};
+}
+
+// Hourglass energy of the in-section strains; adds gradient and upper Hessian blocks.
+double hourglass_energy(const BeamElement& element, const Section& section, const double* q, ElemVec* grad,
+                        ElemMat* hess) {
+  const SectionHourglass& hg = element.hourglass;
+  constexpr double m[3] = {0.5, -1.0, 0.5};
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (int a = 0; a < 3; ++a) c += m[a] * (nodal_section(q, a) - hg.reference.col(a));
+  const Eigen::Vector3d sigma = hg.weight * (section.stiffness_inplane * c);
+  const double energy = 0.5 * c.dot(sigma);
+  if (!grad && !hess) return energy;
+  Eigen::Matrix<double, 3, 6> jac[3];
+  for (int a = 0; a < 3; ++a) {
+    const Eigen::Map<const Vec3> g1(q + 9 * a + 3), g2(q + 9 * a + 6);
+    if (grad) {
+      grad->segment<3>(9 * a + 3) += m[a] * (2.0 * sigma[0] * g1 + sigma[2] * g2);
+      grad->segment<3>(9 * a + 6) += m[a] * (2.0 * sigma[1] * g2 + sigma[2] * g1);
+    }
+    jac[a].setZero();
+    jac[a].block<1, 3>(0, 0) = 2.0 * g1.transpose();
+    jac[a].block<1, 3>(1, 3) = 2.0 * g2.transpose();
+    jac[a].block<1, 3>(2, 0) = g2.transpose();
+    jac[a].block<1, 3>(2, 3) = g1.transpose();
+  }
+  if (!hess) return energy;
+  const Eigen::Matrix3d k = hg.weight * section.stiffness_inplane;
+  for (int a = 0; a < 3; ++a) {
+    const Eigen::Matrix<double, 3, 6> kj = k * jac[a];
+    for (int b = 0; b <= a; ++b) hess->block<6, 6>(9 * b + 3, 9 * a + 3) += (m[a] * m[b]) * jac[b].transpose() * kj;
+    auto h = hess->block<6, 6>(9 * a + 3, 9 * a + 3);
+    h.block<3, 3>(0, 0).diagonal().array() += m[a] * 2.0 * sigma[0];
+    h.block<3, 3>(3, 3).diagonal().array() += m[a] * 2.0 * sigma[1];
+    h.block<3, 3>(0, 3).diagonal().array() += m[a] * sigma[2];
+    h.block<3, 3>(3, 0).diagonal().array() += m[a] * sigma[2];
+  }
+  return energy;
+}
 
 }  // namespace
 
@@ -55,16 +97,19 @@ GenVec beam_dot_products(const AxisVectors& v) {
   return d;
 }
 
-std::array<BeamGauss, kBeamGauss> beam_reference(const double* q_ref) {
-  std::array<BeamGauss, kBeamGauss> out;
+void beam_reference(const double* q_ref, BeamElement& element) {
   for (int gp = 0; gp < kBeamGauss; ++gp) {
+    BeamGauss& g = element.gauss[gp];
     const AxisVectors raw = beam_axis_vectors(q_ref, kGaussEta[gp], 1.0);
     const double jac = raw.col(0).norm();
-    out[gp].weight = jac;  // Gauss weights are 1 for the 2-point rule
-    out[gp].inv_jac = 1.0 / jac;
-    out[gp].reference = beam_dot_products(beam_axis_vectors(q_ref, kGaussEta[gp], out[gp].inv_jac));
+    g.weight = jac;  // Gauss weights are 1 for the 2-point rule
+    g.inv_jac = 1.0 / jac;
+    g.reference = beam_dot_products(beam_axis_vectors(q_ref, kGaussEta[gp], g.inv_jac));
   }
-  return out;
+  double jac_sum = 0.0;
+  for (int gp = 0; gp < kBeamGauss; ++gp) jac_sum += element.gauss[gp].weight;
+  element.hourglass.weight = (8.0 / 45.0) * 0.5 * jac_sum;
+  for (int a = 0; a < 3; ++a) element.hourglass.reference.col(a) = nodal_section(q_ref, a);
 }
 
 GenVec beam_generalized_strains(const BeamElement& element, const double* q, int gp) {
@@ -153,7 +198,10 @@ double beam_element_energy(const BeamElement& element, const Section& section, c
           }
       }
   }
-  if (hess) hess->triangularView<Eigen::StrictlyLower>() = hess->transpose();
+  energy += hourglass_energy(element, section, q, grad, hess);
+  if (hess)
+    for (int c = 0; c < kElementDofs; ++c)
+      for (int r = c + 1; r < kElementDofs; ++r) (*hess)(r, c) = (*hess)(c, r);
   return energy;
 }
 

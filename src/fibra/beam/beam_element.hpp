@@ -22,11 +22,21 @@ using AxisVectors = Eigen::Matrix<double, 3, 5>;
 /// Gauss points along the element axis (reduced 2-point rule on [-1, 1]).
 inline constexpr int kBeamGauss = 2;
 
+
 /// Reference data of one Gauss point.
 struct BeamGauss {
   double weight = 0;    ///< Gauss weight times reference arc-length jacobian [m]
   double inv_jac = 0;   ///< 1 / (d s / d eta) [1/m]
   GenVec reference;     ///< reference generalized dot products
+};
+
+/// Hourglass control of the in-section strains s = (g1.g1, g2.g2, g1.g2): the 2-point rule
+/// cannot see their nodal pattern (1, -2, 1); this adds back exactly the energy the rule misses
+/// for that pattern, (8/45) J/2 c^T C_ss c with c = (s_0 - 2 s_1 + s_2)/2 from nodal values.
+/// Always positive, so the element stays positive semi-definite. See docs/theory/beam.md.
+struct SectionHourglass {
+  double weight = 0;               ///< (8/45) * mean reference jacobian [m]
+  Eigen::Matrix3d reference;       ///< reference nodal s (columns: nodes 0, 1, 2)
 };
 
 /// One element: its 27 contiguous dofs start at `first_dof`.
@@ -35,6 +45,7 @@ struct BeamElement {
   int section = 0;      ///< index into the model's sections
   int fiber = 0;        ///< index of the owning fiber
   std::array<BeamGauss, kBeamGauss> gauss;
+  SectionHourglass hourglass;
 };
 
 /// Shape function values (N) and parametric derivatives (dN/deta) at parametric point eta.
@@ -50,8 +61,8 @@ AxisVectors beam_axis_vectors(const double* q, double eta, double inv_jac);
 /// The 15 generalized dot products of the axis vectors (order in docs/theory/beam.md).
 GenVec beam_dot_products(const AxisVectors& v);
 
-/// Builds the Gauss data of an element from its reference dofs (27 values).
-std::array<BeamGauss, kBeamGauss> beam_reference(const double* q_ref);
+/// Builds the Gauss data of an element (both rules) from its reference dofs (27 values).
+void beam_reference(const double* q_ref, BeamElement& element);
 
 /// Energy of the element at dofs `q` (27 values); adds nothing, writes grad/hess if non-null
 /// (hess is the exact, symmetric second derivative). [J], [N or N m], [N/m ...]

@@ -68,14 +68,19 @@ Section make_section(const MaterialSpec& material, double a, double b, bool enha
     }
   }
   const GenMat kee = k.topLeftCorner<kGenStrains, kGenStrains>();
+  auto split = [](Section& out) {
+    out.stiffness_inplane = out.stiffness.topLeftCorner<3, 3>();
+  };
   if (!enhanced) {
     s.stiffness = kee;
+    split(s);
     return s;
   }
   const auto kea = k.topRightCorner<kGenStrains, kEnhanced>();
   const Eigen::Matrix<double, kEnhanced, kEnhanced> kaa = k.bottomRightCorner<kEnhanced, kEnhanced>();
   const GenMat c = kee - kea * kaa.ldlt().solve(kea.transpose());
   s.stiffness = 0.5 * (c + c.transpose());
+  split(s);
   return s;
 }
 

@@ -25,6 +25,7 @@ struct Section {
   double inertia_1 = 0;   ///< int xi2^2 dA: bending about g1 [m^4]
   double inertia_2 = 0;   ///< int xi1^2 dA: bending about g2 [m^4]
   GenMat stiffness;       ///< condensed section stiffness C (15x15, symmetric PSD) [N, N m, N m^2]
+  Eigen::Matrix3d stiffness_inplane;  ///< in-section block of C (strains 0..2), for hourglass control
 };
 
 /// Builds the section of semi-axes (a, b) of the given material; `enhanced` = false skips

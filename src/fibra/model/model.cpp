@@ -82,7 +82,7 @@ int add_fiber(Model& model, const FiberSpec& spec, int material) {
     el.first_dof = base + 9 * 2 * e;
     el.section = sec;
     el.fiber = fiber_id;
-    el.gauss = beam_reference(model.reference.data() + el.first_dof);
+    beam_reference(model.reference.data() + el.first_dof, el);
     model.elements.push_back(el);
   }
   model.fibers.push_back(fib);

@@ -65,6 +65,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                  {"factorizations", s.factorizations},
                  {"regularized_factorizations", s.regularized_factorizations},
                  {"line_search_trials", s.line_search_trials},
+                 {"roundoff_convergences", s.roundoff_convergences},
                  {"factor_nonzeros", s.factor_nonzeros}};
   writer.write_summary(j);
   return report;

@@ -4,6 +4,18 @@
 #include <cmath>
 
 namespace fibra {
+namespace {
+
+// Weight of a section vector whose reference projection on the moment plane has squared
+// length p (the other's q); a vector along the axis up to rounding gets exactly 0, so it
+// adds no (spurious, indefinite) stiffness.
+double moment_weight(double p, double q) {
+  if (p < 1e-24 * (p + q)) return 0.0;
+  if (q < 1e-24 * (p + q)) return 1.0;
+  return p / (p + q);
+}
+
+}  // namespace
 
 Vec6 moment_generalized_force(const Vec3& moment, const Vec3& rg1, const Vec3& rg2, const Vec3& g1,
                               const Vec3& g2, Mat6x6* dforce) {
@@ -14,7 +26,7 @@ Vec6 moment_generalized_force(const Vec3& moment, const Vec3& rg1, const Vec3& r
   const Vec3 n = moment / mag;
   const Mat3 proj = Mat3::Identity() - n * n.transpose();
   const double p1 = (proj * rg1).squaredNorm(), p2 = (proj * rg2).squaredNorm();
-  const double w[2] = {p1 / (p1 + p2), p2 / (p1 + p2)};
+  const double w[2] = {moment_weight(p1, p2), moment_weight(p2, p1)};
   Mat3 skew;
   skew << 0, -n.z(), n.y(), n.z(), 0, -n.x(), -n.y(), n.x(), 0;
   const Vec3* gs[2] = {&g1, &g2};
@@ -36,7 +48,7 @@ double moment_work(const Vec3& moment, const Vec3& rg1, const Vec3& rg2, const V
   const Vec3 n = moment / mag;
   const Mat3 proj = Mat3::Identity() - n * n.transpose();
   const double p1 = (proj * rg1).squaredNorm(), p2 = (proj * rg2).squaredNorm();
-  const double w[2] = {p1 / (p1 + p2), p2 / (p1 + p2)};
+  const double w[2] = {moment_weight(p1, p2), moment_weight(p2, p1)};
   const Vec3* from[2] = {&h1, &h2};
   const Vec3* to[2] = {&g1, &g2};
   double work = 0.0;

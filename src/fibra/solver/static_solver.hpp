@@ -36,6 +36,7 @@ struct SolverStats {
   int factorizations = 0;
   int regularized_factorizations = 0;
   int line_search_trials = 0;
+  int roundoff_convergences = 0;  ///< increments accepted at the round-off floor of the residual
   double time_assembly = 0;
   double time_factorization = 0;
   double time_solve = 0;

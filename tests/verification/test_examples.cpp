@@ -1,0 +1,74 @@
+// Every example case (examples/*/*.toml, found by globbing so that new examples are covered
+// automatically) runs to convergence through run_case and writes its outputs.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include "fibra/io/case_reader.hpp"
+#include "fibra/run/run_case.hpp"
+
+namespace fibra {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<fs::path> example_cases() {
+  std::vector<fs::path> out;
+  const fs::path root = fs::path(FIBRA_SOURCE_DIR) / "examples";
+  for (const fs::directory_entry& dir : fs::directory_iterator(root)) {
+    if (!dir.is_directory()) continue;
+    for (const fs::directory_entry& f : fs::directory_iterator(dir.path()))
+      if (f.is_regular_file() && f.path().extension() == ".toml") out.push_back(f.path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+TEST(Examples, ThereAreExamples) {
+  const std::vector<fs::path> cases = example_cases();
+  EXPECT_FALSE(cases.empty());
+  EXPECT_NE(std::find(cases.begin(), cases.end(),
+                      fs::path(FIBRA_SOURCE_DIR) / "examples" / "cantilever" / "cantilever.toml"),
+            cases.end());
+}
+
+class Example : public ::testing::TestWithParam<fs::path> {};
+
+TEST_P(Example, RunsToConvergenceAndWritesItsOutputs) {
+  const fs::path file = GetParam();
+  const Case c = read_case(file.string());
+  const fs::path dir = fs::temp_directory_path() /
+                       ("fibra_example_" + c.name + "_" + std::to_string(static_cast<long>(::getpid())));
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+  RunOptions options;
+  options.out_dir = dir.string();
+  const RunReport report = run_case(c, options);
+  EXPECT_EQ(report.result.status, RunResult::Status::Converged) << file << ": " << report.result.message;
+  for (const char* name : {"history.csv", "nodes.csv", "fibers.pvd", "summary.json"})
+    EXPECT_TRUE(fs::is_regular_file(dir / name)) << file << ": no " << name;
+  std::ifstream in(dir / "summary.json");
+  const nlohmann::json summary = nlohmann::json::parse(in, nullptr, false);
+  ASSERT_FALSE(summary.is_discarded()) << file << ": summary.json does not parse";
+  EXPECT_EQ(summary.value("status", ""), "converged") << file;
+  EXPECT_TRUE(report.final_state.allFinite()) << file;
+  std::printf("%s: %d increments, %d iterations, %.2f s\n", file.filename().c_str(), report.stats.increments,
+              report.stats.iterations, report.wall_time);
+  fs::remove_all(dir, ec);
+}
+
+INSTANTIATE_TEST_SUITE_P(All, Example, ::testing::ValuesIn(example_cases()), [](const auto& p) {
+  std::string name = p.param.parent_path().filename().string() + "_" + p.param.stem().string();
+  for (char& ch : name)
+    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+  return name;
+});
+
+}  // namespace
+}  // namespace fibra
