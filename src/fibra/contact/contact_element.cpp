@@ -1,0 +1,94 @@
+#include "fibra/contact/contact_element.hpp"
+
+#include "fibra/beam/beam_element.hpp"
+
+namespace fibra {
+
+Eigen::Matrix<double, 3, kElementDofs> particle_map(const Particle& p) {
+  double n[3], dn[3];
+  beam_shape(p.eta, n, dn);
+  Eigen::Matrix<double, 3, kElementDofs> b = Eigen::Matrix<double, 3, kElementDofs>::Zero();
+  for (int a = 0; a < 3; ++a) {
+    b.block<3, 3>(0, 9 * a).diagonal().setConstant(n[a]);
+    b.block<3, 3>(0, 9 * a + 3).diagonal().setConstant(n[a] * p.xi1);
+    b.block<3, 3>(0, 9 * a + 6).diagonal().setConstant(n[a] * p.xi2);
+  }
+  return b;
+}
+
+Vec3 particle_position(const Particle& p, const double* q) {
+  double n[3], dn[3];
+  beam_shape(p.eta, n, dn);
+  Vec3 x = Vec3::Zero();
+  for (int a = 0; a < 3; ++a) {
+    const Eigen::Map<const Vec3> x0(q + 9 * a), g1(q + 9 * a + 3), g2(q + 9 * a + 6);
+    x += n[a] * (x0 + p.xi1 * g1 + p.xi2 * g2);
+  }
+  return x;
+}
+
+double contact_element_energy(const ContactElement& c, const double* q_a, const double* q_b,
+                              const FrictionParams& friction, ContactVec* grad, ContactMat* hess,
+                              ContactResponse* response, bool consistent) {
+  const Vec3 d = particle_position(c.b, q_b) - particle_position(c.a, q_a);
+  const Vec3& nrm = c.normal;
+  const double gap = d.dot(nrm);
+  const double p = -gap;
+  const double fn = c.law.force(p);
+  double energy = c.law.potential(p);
+
+  // Friction: return mapping on the tangential relative displacement since the last
+  // converged state; the spring's energy f_prev . du + kt/2 |du|^2 (stick) makes the
+  // stick response a gradient; slip uses the cone-projected force.
+  FrictionState fr;
+  double kt = 0.0;
+  const Mat3 proj = Mat3::Identity() - nrm * nrm.transpose();
+  const Vec3 du = proj * (d - c.separation_previous);
+  if (friction.mu > 0.0 && fn > 0.0) {
+    kt = friction.mu * fn / friction.elastic_slip;
+    fr = friction_return_map(c.friction_previous, d - c.separation_previous, nrm, fn, friction.mu, kt);
+    const Vec3 fprev = proj * c.friction_previous;
+    energy += fr.slip ? fr.force.dot(du) : fprev.dot(du) + 0.5 * kt * du.squaredNorm();
+  }
+  if (response) {
+    response->gap = gap;
+    response->normal_force = fn;
+    response->friction = fr.force;
+    response->slip = fr.slip;
+  }
+  if (!grad && !hess) return energy;
+
+  Eigen::Matrix<double, 3, kContactDofs> map;
+  map.leftCols<kElementDofs>() = -particle_map(c.a);
+  map.rightCols<kElementDofs>() = particle_map(c.b);
+  // d(d)/dq = map. Force on d: -fn N (normal, pushes B away from A) + friction force.
+  const Vec3 force_d = -fn * nrm + fr.force;
+  if (grad) *grad = map.transpose() * force_d;
+  if (hess) {
+    const Eigen::Matrix<double, 1, kContactDofs> gn = nrm.transpose() * map;
+    *hess = c.law.stiffness_at(p) * gn.transpose() * gn;
+    if (kt > 0.0) {
+      Mat3 kd;
+      const Vec3 t = fr.force.normalized();
+      if (!consistent) {
+        // Symmetric approximation: kt held fixed, and in slip only the turning of the force
+        // with the trial direction.
+        kd = fr.slip ? Mat3((kt * friction.mu * fn / fr.trial_norm) * (proj - t * t.transpose())) : Mat3(kt * proj);
+      } else {
+        // Exact: kt = mu fn / delta depends on the gap, d fn / d d = -fn' N.
+        const Vec3 dfn = -c.law.stiffness_at(p) * nrm;
+        const Mat3 dtrial = kt * proj + (friction.mu / friction.elastic_slip) * du * dfn.transpose();
+        if (!fr.slip) {
+          kd = dtrial;
+        } else {
+          kd = friction.mu * t * dfn.transpose() +
+               (friction.mu * fn / fr.trial_norm) * (Mat3::Identity() - t * t.transpose()) * dtrial;
+        }
+      }
+      *hess += map.transpose() * kd * map;
+    }
+  }
+  return energy;
+}
+
+}  // namespace fibra

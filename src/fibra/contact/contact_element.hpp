@@ -1,0 +1,70 @@
+#pragma once
+/// A contact element: a pair of material particles on the borders of two fiber sections,
+/// predicted to touch (METHOD §2), with its normal, penalty law and friction history.
+///
+/// Particle P on beam element e sits at parametric eta and section coordinates (xi1, xi2):
+/// x = sum_a N_a(eta) (x0_a + xi1 g1_a + xi2 g2_a), linear in the element's 27 dofs. With
+/// the normal N fixed during Newton iterations, gap = N . (x_B - x_A) is linear in the 54
+/// dofs of the two elements, so the normal energy phi(-gap) has an exact rank-one Hessian.
+#include <Eigen/Core>
+
+#include "fibra/contact/contact_law.hpp"
+#include "fibra/core/types.hpp"
+
+namespace fibra {
+
+/// Dofs of a contact element: the 27 of element A then the 27 of element B.
+inline constexpr int kContactDofs = 2 * kElementDofs;
+using ContactVec = Eigen::Matrix<double, kContactDofs, 1>;
+using ContactMat = Eigen::Matrix<double, kContactDofs, kContactDofs>;
+
+/// A material particle on a beam element.
+struct Particle {
+  Index element = 0;  ///< global beam element index
+  double eta = 0;     ///< parametric coordinate in [-1, 1]
+  double xi1 = 0;     ///< section coordinate along g1 [m]
+  double xi2 = 0;     ///< section coordinate along g2 [m]
+};
+
+/// One contact element and its state.
+struct ContactElement {
+  Particle a;                      ///< particle on fiber i
+  Particle b;                      ///< particle on fiber j
+  Vec3 normal = Vec3::UnitZ();     ///< unit normal, from A's section centre towards B's
+  PenaltyLaw law;                  ///< normal law (stiffness adapted per proximity zone)
+  int zone = 0;                    ///< proximity zone index
+  // Friction history (at the last converged increment).
+  Vec3 friction_previous = Vec3::Zero();  ///< tangential force on B at the last converged state [N]
+  Vec3 separation_previous = Vec3::Zero();  ///< x_B - x_A at the last converged state [m]
+};
+
+/// Evaluated quantities of a contact element (for output and the adaptive penalty).
+struct ContactResponse {
+  double gap = 0;            ///< N . (x_B - x_A) [m]; negative = penetration
+  double normal_force = 0;   ///< >= 0 [N]
+  Vec3 friction = Vec3::Zero();  ///< tangential force on B [N]
+  bool slip = false;         ///< friction on the Coulomb cone
+};
+
+/// Friction parameters.
+struct FrictionParams {
+  double mu = 0;            ///< Coulomb coefficient
+  double elastic_slip = 0;  ///< delta [m]: tangential stiffness mu f_n / delta
+};
+
+/// The 3x27 map from element dofs to the position of particle p: x = B q_e.
+Eigen::Matrix<double, 3, kElementDofs> particle_map(const Particle& p);
+
+/// Position of particle p from the element dofs q_e (27 values).
+Vec3 particle_position(const Particle& p, const double* q_e);
+
+/// Energy (normal potential plus the friction spring's, see docs/theory/contact.md), gradient
+/// and Hessian with respect to [q_A; q_B]; q_a, q_b are the current element dofs. Friction
+/// force is computed by return mapping from the element's history. The Hessian is exact for
+/// the normal part; for friction it is the symmetric approximation used by the solver, or,
+/// with `consistent`, the exact (non-symmetric) derivative of the gradient.
+double contact_element_energy(const ContactElement& c, const double* q_a, const double* q_b,
+                              const FrictionParams& friction, ContactVec* grad, ContactMat* hess,
+                              ContactResponse* response, bool consistent = false);
+
+}  // namespace fibra
