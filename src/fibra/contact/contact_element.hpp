@@ -33,6 +33,7 @@ struct ContactElement {
   Vec3 normal = Vec3::UnitZ();     ///< unit normal, from A's section centre towards B's
   PenaltyLaw law;                  ///< normal law (stiffness adapted per proximity zone)
   int zone = 0;                    ///< proximity zone index
+  bool fresh = true;               ///< appeared at the last detection (no history carried over)
   // Friction history (at the last converged increment).
   Vec3 friction_previous = Vec3::Zero();  ///< tangential force on B at the last converged state [N]
   Vec3 separation_previous = Vec3::Zero();  ///< x_B - x_A at the last converged state [m]

@@ -315,7 +315,7 @@ struct KeyHint {
 using Keys = std::vector<std::string_view>;
 
 /// The keys of the top level of a case file.
-const Keys kTopLevelKeys = {"title", "material", "fiber", "fix", "step", "solver", "output"};
+const Keys kTopLevelKeys = {"title", "material", "fiber", "fix", "step", "solver", "contact", "output"};
 
 // ------------------------------------------------------------------------------------------
 // Schema validation, written once for both formats.
@@ -525,6 +525,7 @@ class Reader {
                                      const std::vector<FiberSpec>& fibers) const;
   SolverSpec read_solver(const Value& t, const std::string& path) const;
   OutputSpec read_output(const Value& t, const std::string& path) const;
+  ContactSpec read_contact(const Value& t, const std::string& path) const;
 
   std::string m_file;
   bool m_json;
@@ -980,6 +981,45 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   return s;
 }
 
+ContactSpec Reader::read_contact(const Value& t, const std::string& path) const {
+  expect_table(t, path);
+  check_keys(t, path,
+             {"friction", "max_penetration", "elastic_slip", "stiffness", "regularization", "margin", "spacing",
+              "self_exclusion", "max_detections", "max_normal_updates", "normal_tolerance"});
+  ContactSpec c;
+  c.enabled = true;
+  const auto non_negative = [&](const char* name, double& out) {
+    if (const Value* v = find(t, name)) {
+      const std::string key = join(path, name);
+      out = to_number(*v, key);
+      if (!(out >= 0)) fail(key, fmt::format("expected a number >= 0, got {}", out), v);
+    }
+  };
+  non_negative("friction", c.friction);
+  if (const Value* v = find(t, "max_penetration")) {
+    const std::string key = join(path, "max_penetration");
+    c.max_penetration = to_number(*v, key);
+    if (!(c.max_penetration > 0 && c.max_penetration < 1))
+      fail(key, fmt::format("expected a fraction of the radius in (0, 1), got {}", c.max_penetration), v);
+  }
+  non_negative("elastic_slip", c.elastic_slip);
+  non_negative("stiffness", c.stiffness);
+  if (const Value* v = find(t, "regularization")) {
+    const std::string key = join(path, "regularization");
+    c.regularization = to_number(*v, key);
+    if (!(c.regularization > 0 && c.regularization <= 1))
+      fail(key, fmt::format("expected a fraction of the allowed penetration in (0, 1], got {}", c.regularization), v);
+  }
+  non_negative("margin", c.margin);
+  non_negative("spacing", c.spacing);
+  non_negative("self_exclusion", c.self_exclusion);
+  if (const Value* v = find(t, "max_detections")) c.max_detections = to_int(*v, join(path, "max_detections"), 1);
+  if (const Value* v = find(t, "max_normal_updates"))
+    c.max_normal_updates = to_int(*v, join(path, "max_normal_updates"), 1);
+  if (const Value* v = find(t, "normal_tolerance")) c.normal_tolerance = positive(*v, join(path, "normal_tolerance"));
+  return c;
+}
+
 OutputSpec Reader::read_output(const Value& t, const std::string& path) const {
   expect_table(t, path);
   check_keys(t, path, {"every", "tube_sides"});
@@ -1061,6 +1101,7 @@ Case Reader::read(const Value& root) const {
 
   if (const Value* v = find(root, "solver")) c.solver = read_solver(*v, "solver");
   if (const Value* v = find(root, "output")) c.output = read_output(*v, "output");
+  if (const Value* v = find(root, "contact")) c.contact = read_contact(*v, "contact");
   return c;
 }
 

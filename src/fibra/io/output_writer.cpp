@@ -156,28 +156,12 @@ struct VtuPiece {
 
 void push3(std::vector<double>& v, const Vec3& x) { v.insert(v.end(), {x[0], x[1], x[2]}); }
 
-void write_vtu_file(const std::string& path, const VtuPiece& p, double time) {
+/// Writes one .vtu with the given point data, points and cells (appended raw binary).
+void write_vtu_arrays(const std::string& path, double time, size_t n_points, size_t n_cells,
+                      const std::vector<VtuArray>& point_data, const std::vector<VtuArray>& points,
+                      const std::vector<VtuArray>& cells, std::string_view scalars, std::string_view vectors) {
   const std::vector<double> time_value{time};
-  const size_t n_points = p.axial_strain.size();
-  const size_t n_cells = p.types.size();
-
   std::vector<VtuArray> field = {vtu_array("TimeValue", "Float64", 1, time_value)};
-  std::vector<VtuArray> point_data = {
-      vtu_array("displacement", "Float64", 3, p.displacement),
-      vtu_array("axial_strain", "Float64", 1, p.axial_strain),
-      vtu_array("axial_force", "Float64", 1, p.axial_force),
-      vtu_array("g1", "Float64", 3, p.g1),
-      vtu_array("g2", "Float64", 3, p.g2),
-      vtu_array("fiber", "Int32", 1, p.fiber),
-      vtu_array("node", "Int32", 1, p.node),
-  };
-  std::vector<VtuArray> points = {vtu_array("Points", "Float64", 3, p.points)};
-  std::vector<VtuArray> cells = {
-      vtu_array("connectivity", "Int64", 1, p.connectivity),
-      vtu_array("offsets", "Int64", 1, p.offsets),
-      vtu_array("types", "UInt8", 1, p.types),
-  };
-
   std::uint64_t offset = 0;
   std::vector<const VtuArray*> order;
   std::string xml;
@@ -198,7 +182,7 @@ void write_vtu_file(const std::string& path, const VtuPiece& p, double time) {
   add(field, "      ", true);
   xml += "    </FieldData>\n";
   xml += fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", n_points, n_cells);
-  xml += "      <PointData Scalars=\"axial_force\" Vectors=\"displacement\">\n";
+  xml += fmt::format("      <PointData Scalars=\"{}\" Vectors=\"{}\">\n", scalars, vectors);
   add(point_data, "        ", false);
   xml += "      </PointData>\n      <Points>\n";
   add(points, "        ", false);
@@ -215,6 +199,26 @@ void write_vtu_file(const std::string& path, const VtuPiece& p, double time) {
     }
     f.write("\n  </AppendedData>\n</VTKFile>\n");
   });
+}
+
+void write_vtu_file(const std::string& path, const VtuPiece& p, double time) {
+  std::vector<VtuArray> point_data = {
+      vtu_array("displacement", "Float64", 3, p.displacement),
+      vtu_array("axial_strain", "Float64", 1, p.axial_strain),
+      vtu_array("axial_force", "Float64", 1, p.axial_force),
+      vtu_array("g1", "Float64", 3, p.g1),
+      vtu_array("g2", "Float64", 3, p.g2),
+      vtu_array("fiber", "Int32", 1, p.fiber),
+      vtu_array("node", "Int32", 1, p.node),
+  };
+  std::vector<VtuArray> points = {vtu_array("Points", "Float64", 3, p.points)};
+  std::vector<VtuArray> cells = {
+      vtu_array("connectivity", "Int64", 1, p.connectivity),
+      vtu_array("offsets", "Int64", 1, p.offsets),
+      vtu_array("types", "UInt8", 1, p.types),
+  };
+  write_vtu_arrays(path, time, p.axial_strain.size(), p.types.size(), point_data, points, cells, "axial_force",
+                   "displacement");
 }
 
 /// Nodal state used by both .vtu files.
@@ -246,8 +250,8 @@ OutputWriter::OutputWriter(std::string dir, const Model& model, std::vector<std:
 
   // Remove what a previous run in this directory left, so that no stale collection,
   // summary or numbered .vtu can be mistaken for output of this run.
-  static const std::regex numbered(R"((fibers|lines)_\d{6}\.vtu(\.tmp)?)");
-  for (const char* name : {"fibers.pvd", "lines.pvd", "nodes.csv", "summary.json"}) fs::remove(path(name), ec);
+  static const std::regex numbered(R"((fibers|lines|contacts)_\d{6}\.vtu(\.tmp)?)");
+  for (const char* name : {"fibers.pvd", "lines.pvd", "contacts.pvd", "nodes.csv", "summary.json"}) fs::remove(path(name), ec);
   for (fs::directory_iterator it(m_dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string name = it->path().filename().string();
     if (std::regex_match(name, numbered)) {
@@ -278,15 +282,49 @@ void OutputWriter::check_state(const VecX& q) const {
     throw RunError(fmt::format("output: state has {} values, the model has {} dofs", q.size(), m_model.num_dofs()));
 }
 
-void OutputWriter::write_increment(const VecX& q, const HistoryRow& row, double time, bool write_vtu_files) {
+void OutputWriter::write_increment(const VecX& q, const HistoryRow& row, double time, bool write_vtu_files,
+                                   const std::vector<ContactPoint>* contacts) {
   check_state(q);
   write_history_row(row);
   if (!write_vtu_files) return;
   const int index = vtu_count();
   write_vtu(q, index, time);
+  if (contacts) write_contacts(*contacts, index, time);
   m_vtu_files.emplace_back(time, index);
   write_pvd("fibers.pvd", "fibers");
   write_pvd("lines.pvd", "lines");
+  if (contacts) write_pvd("contacts.pvd", "contacts");
+}
+
+void OutputWriter::write_contacts(const std::vector<ContactPoint>& contacts, int index, double time) const {
+  const size_t n = contacts.size();
+  std::vector<double> points, normal, friction, gap, force;
+  std::vector<std::int32_t> slip, zone;
+  std::vector<std::int64_t> connectivity(n), offsets(n);
+  std::vector<std::uint8_t> types(n, 1);  // VTK_VERTEX
+  points.reserve(3 * n);
+  for (size_t k = 0; k < n; ++k) {
+    const ContactPoint& c = contacts[k];
+    push3(points, c.position);
+    push3(normal, c.normal);
+    push3(friction, c.friction);
+    gap.push_back(c.gap);
+    force.push_back(c.normal_force);
+    slip.push_back(c.slip ? 1 : 0);
+    zone.push_back(c.zone);
+    connectivity[k] = static_cast<std::int64_t>(k);
+    offsets[k] = static_cast<std::int64_t>(k + 1);
+  }
+  std::vector<VtuArray> point_data = {
+      vtu_array("gap", "Float64", 1, gap),           vtu_array("normal_force", "Float64", 1, force),
+      vtu_array("friction", "Float64", 3, friction), vtu_array("normal", "Float64", 3, normal),
+      vtu_array("slip", "Int32", 1, slip),           vtu_array("zone", "Int32", 1, zone),
+  };
+  std::vector<VtuArray> pts = {vtu_array("Points", "Float64", 3, points)};
+  std::vector<VtuArray> cells = {vtu_array("connectivity", "Int64", 1, connectivity),
+                                 vtu_array("offsets", "Int64", 1, offsets), vtu_array("types", "UInt8", 1, types)};
+  write_vtu_arrays(path(fmt::format("contacts_{:06d}.vtu", index)), time, n, n, point_data, pts, cells, "normal_force",
+                   "normal");
 }
 
 void OutputWriter::write_history_row(const HistoryRow& row) {

@@ -28,6 +28,17 @@ struct HistoryRow {
   std::vector<double> extra; ///< values of the extra columns, in the writer's order
 };
 
+/// A contact element for the ParaView output.
+struct ContactPoint {
+  Vec3 position = Vec3::Zero();  ///< midpoint of the two particles [m]
+  Vec3 normal = Vec3::Zero();    ///< contact normal
+  Vec3 friction = Vec3::Zero();  ///< tangential force [N]
+  double gap = 0;                ///< [m], negative = penetration
+  double normal_force = 0;       ///< [N]
+  bool slip = false;             ///< on the Coulomb cone
+  int zone = 0;                  ///< proximity zone
+};
+
 /// Writes all output files of a run into one directory.
 class OutputWriter {
  public:
@@ -39,7 +50,8 @@ class OutputWriter {
   OutputWriter& operator=(const OutputWriter&) = delete;  ///< not copyable (owns a file)
 
   /// Appends a history row (flushed to disk at once) and, if write_vtu, writes fibers_NNNNNN.vtu and lines_NNNNNN.vtu and rewrites fibers.pvd / lines.pvd (timestep = load counter `time`) so the collections are valid after every increment.
-  void write_increment(const VecX& q, const HistoryRow& row, double time, bool write_vtu);
+  void write_increment(const VecX& q, const HistoryRow& row, double time, bool write_vtu,
+                       const std::vector<ContactPoint>* contacts = nullptr);
   /// Writes nodes.csv for state q: columns fiber,node,x,y,z,g1x,g1y,g1z,g2x,g2y,g2z (fiber name, node index local to the fiber), full double precision.
   void write_nodes(const VecX& q) const;
   /// Writes summary.json (pretty-printed, atomically: write tmp then rename).
@@ -57,6 +69,7 @@ class OutputWriter {
   void write_history_row(const HistoryRow& row);
   void write_vtu(const VecX& q, int index, double time) const;
   void write_pvd(const std::string& name, const std::string& prefix) const;
+  void write_contacts(const std::vector<ContactPoint>& contacts, int index, double time) const;
   void check_state(const VecX& q) const;
 
   std::string m_dir;

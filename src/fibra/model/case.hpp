@@ -109,6 +109,22 @@ struct SolverSpec {
   std::string linear_solver = "cholmod";  ///< "cholmod" or "eigen"
 };
 
+/// Contact and friction settings ([contact] table); contact is off when the table is absent.
+struct ContactSpec {
+  bool enabled = false;
+  double friction = 0;            ///< Coulomb coefficient mu
+  double max_penetration = 0.05;  ///< allowed penetration, fraction of the smaller radius of a pair
+  double elastic_slip = 0;        ///< reversible slip delta [m]; 0 = 1e-3 times the smallest radius
+  double stiffness = 0;           ///< initial penalty k [N/m]; 0 = E_T times the smallest radius
+  double regularization = 0.5;    ///< p_r as a fraction of the allowed penetration
+  double margin = 0;              ///< detection margin [m]; 0 = half the smaller radius of a pair
+  double spacing = 0;             ///< contact element spacing [m]; 0 = the smaller radius of a pair
+  double self_exclusion = 0;      ///< same-fiber arc length without self-contact [m]; 0 = default
+  int max_detections = 8;         ///< detection loops per increment
+  int max_normal_updates = 12;    ///< normal-update loops per detection
+  double normal_tolerance = 1e-3; ///< normals converged when they turn less than this [rad]
+};
+
 /// Output settings ([output] table).
 struct OutputSpec {
   int every = 1;               ///< write a .vtu every N converged increments (last always)
@@ -125,6 +141,7 @@ struct Case {
   std::vector<FixSpec> fixes;
   std::vector<StepSpec> steps;
   SolverSpec solver;
+  ContactSpec contact;
   OutputSpec output;
 };
 

@@ -16,19 +16,45 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   const Model model = build_model(c);
   StaticSolver solver(c, model);
   if (options.progress) solver.set_progress(options.progress);
-  OutputWriter writer(options.out_dir, model, solver.reaction_columns(), c.output.tube_sides);
+  std::vector<std::string> columns = solver.reaction_columns();
+  const std::vector<std::string> contact_columns = {
+      "contact:zones",       "contact:elements",   "contact:max_penetration_ratio", "contact:normal_force",
+      "contact:detections",  "contact:normal_updates", "contact:penalty_raises",    "contact:detection_time",
+      "contact:solve_time"};
+  if (solver.has_contact()) columns.insert(columns.end(), contact_columns.begin(), contact_columns.end());
+  OutputWriter writer(options.out_dir, model, columns, c.output.tube_sides);
   double time_output = 0.0;
   auto observer = [&](const IncrementInfo& info, const VecX& q) {
     const auto t = std::chrono::steady_clock::now();
     HistoryRow row{info.step, info.step_index, info.increment, info.load_factor, info.iterations,
                    info.residual, info.wall_time, info.reactions};
+    if (solver.has_contact()) {
+      const ContactStats& cs = info.contact;
+      row.extra.insert(row.extra.end(),
+                       {double(cs.zones), double(cs.elements), cs.max_penetration_ratio, cs.total_normal_force,
+                        double(cs.detections), double(cs.normal_updates), double(cs.penalty_raises), cs.detection_time,
+                        info.increment_time - cs.detection_time});
+    }
     const bool vtu = info.step_end || info.total_increments % c.output.every == 0;
-    writer.write_increment(q, row, info.step_index + info.load_factor, vtu);
+    std::vector<ContactPoint> points;
+    if (vtu && solver.has_contact()) {
+      const auto& contacts = solver.problem().contacts();
+      const std::vector<ContactResponse> responses = solver.problem().contact_responses(q);
+      points.reserve(contacts.size());
+      for (size_t k = 0; k < contacts.size(); ++k) {
+        const ContactElement& ce = contacts[k];
+        const Vec3 xa = particle_position(ce.a, q.data() + model.elements[ce.a.element].first_dof);
+        const Vec3 xb = particle_position(ce.b, q.data() + model.elements[ce.b.element].first_dof);
+        points.push_back({0.5 * (xa + xb), ce.normal, responses[k].friction, responses[k].gap, responses[k].normal_force,
+                          responses[k].slip, ce.zone});
+      }
+    }
+    writer.write_increment(q, row, info.step_index + info.load_factor, vtu, solver.has_contact() ? &points : nullptr);
     time_output += std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   };
   // Initial (reference) state as increment 0 in the ParaView collection.
   writer.write_increment(model.reference, HistoryRow{"initial", -1, 0, 0.0, 0, 0.0, 0.0,
-                                                     std::vector<double>(solver.reaction_columns().size(), 0.0)},
+                                                     std::vector<double>(columns.size(), 0.0)},
                          0.0, true);
   RunReport report;
   report.result = solver.run(observer);

@@ -1,5 +1,6 @@
 #include "fibra/solver/problem.hpp"
 
+#include <algorithm>
 #include <chrono>
 
 #include "fibra/solver/nodal_load.hpp"
@@ -30,6 +31,52 @@ Problem::Problem(const Model& model)
   for (Index d = 0; d < model.num_dofs(); ++d) m_diagonal[d] = m_pattern.find(d, d);
 }
 
+bool Problem::set_contacts(std::vector<ContactElement> contacts, const FrictionParams& friction) {
+  m_friction = friction;
+  for (ContactElement& c : contacts)
+    if (c.a.element > c.b.element) {
+      std::swap(c.a, c.b);
+      c.normal = -c.normal;
+      c.friction_previous = -c.friction_previous;
+      c.separation_previous = -c.separation_previous;
+    }
+  std::stable_sort(contacts.begin(), contacts.end(), [](const ContactElement& x, const ContactElement& y) {
+    return std::pair(x.a.element, x.b.element) < std::pair(y.a.element, y.b.element);
+  });
+  StencilSet pairs;
+  std::vector<Index> begin;
+  for (size_t k = 0; k < contacts.size(); ++k) {
+    if (k > 0 && contacts[k].a.element == contacts[k - 1].a.element && contacts[k].b.element == contacts[k - 1].b.element)
+      continue;
+    const Index na = m_model.elements[contacts[k].a.element].first_dof / kNodeDofs;
+    const Index nb = m_model.elements[contacts[k].b.element].first_dof / kNodeDofs;
+    const Index g[6] = {na, na + 1, na + 2, nb, nb + 1, nb + 2};
+    pairs.add(g);
+    begin.push_back(static_cast<Index>(k));
+  }
+  begin.push_back(static_cast<Index>(contacts.size()));
+  const bool changed = pairs.groups != m_contact_pairs.groups;
+  m_contacts = std::move(contacts);
+  m_pair_begin = std::move(begin);
+  if (changed) {
+    pairs.colorize(m_model.num_nodes());
+    m_contact_pairs = std::move(pairs);
+    m_pattern = BlockPattern(std::vector<int>(m_model.num_nodes(), kNodeDofs), {&m_beams, &m_contact_pairs});
+    for (Index d = 0; d < m_model.num_dofs(); ++d) m_diagonal[d] = m_pattern.find(d, d);
+  }
+  return changed;
+}
+
+std::vector<ContactResponse> Problem::contact_responses(const VecX& q) const {
+  std::vector<ContactResponse> out(m_contacts.size());
+  for (size_t k = 0; k < m_contacts.size(); ++k) {
+    const ContactElement& c = m_contacts[k];
+    contact_element_energy(c, q.data() + m_model.elements[c.a.element].first_dof,
+                           q.data() + m_model.elements[c.b.element].first_dof, m_friction, nullptr, nullptr, &out[k]);
+  }
+  return out;
+}
+
 double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hessian) {
   const auto t0 = std::chrono::steady_clock::now();
   if (gradient) gradient->setZero(q.size());
@@ -42,6 +89,28 @@ double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hes
         const BeamElement& e = model.elements[s];
         return beam_element_energy(e, model.sections[e.section], q.data() + e.first_dof, g, h);
       });
+
+  if (!m_contacts.empty()) {
+    std::vector<double> pair_energy;
+    energy += assemble_set<ContactVec, ContactMat>(
+        m_contact_pairs, target, gradient != nullptr, hessian != nullptr, pair_energy,
+        [&](Index s, ContactVec* g, ContactMat* h) {
+          double e = 0.0;
+          ContactVec gl;
+          ContactMat hl;
+          if (g) g->setZero();
+          if (h) h->setZero();
+          for (Index k = m_pair_begin[s]; k < m_pair_begin[s + 1]; ++k) {
+            const ContactElement& c = m_contacts[k];
+            e += contact_element_energy(c, q.data() + model.elements[c.a.element].first_dof,
+                                        q.data() + model.elements[c.b.element].first_dof, m_friction, g ? &gl : nullptr,
+                                        h ? &hl : nullptr, nullptr);
+            if (g) *g += gl;
+            if (h) *h += hl;
+          }
+          return e;
+        });
+  }
 
   // Dead forces: potential -f . (q - q_ref).
   energy -= m_forces.dot(q - model.reference);

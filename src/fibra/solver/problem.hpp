@@ -3,6 +3,7 @@
 /// gradient (f_int - f_ext) and Hessian, with eliminated (fixed or prescribed) dofs.
 #include <vector>
 
+#include "fibra/contact/contact_element.hpp"
 #include "fibra/model/model.hpp"
 #include "fibra/solver/assembler.hpp"
 #include "fibra/solver/block_pattern.hpp"
@@ -35,6 +36,15 @@ class Problem {
   std::vector<NodalMoment>& moments() { return m_moments; }      ///< nodal moments
   const AssemblyTimes& times() const { return m_times; }         ///< accumulated timings
 
+  /// Replaces the contact elements (each is oriented so that a.element < b.element) and the
+  /// friction parameters; returns true when the matrix pattern changed (new element pairs),
+  /// after which the linear solver's analysis must be redone.
+  bool set_contacts(std::vector<ContactElement> contacts, const FrictionParams& friction);
+  const std::vector<ContactElement>& contacts() const { return m_contacts; }  ///< current contact elements
+  std::vector<ContactElement>& contacts() { return m_contacts; }              ///< (normals, laws, history)
+  /// Evaluated state of every contact element at q (same order as contacts()).
+  std::vector<ContactResponse> contact_responses(const VecX& q) const;
+
   /// Sets the state from which moment work is measured in evaluate()'s energy (moment
   /// potentials are only defined up to whole turns, so energies are compared near this state).
   void set_energy_base(const VecX& q) { m_energy_base = q; }
@@ -45,6 +55,10 @@ class Problem {
  private:
   const Model& m_model;
   StencilSet m_beams;
+  StencilSet m_contact_pairs;            // one stencil per element pair in contact (6 nodes)
+  std::vector<Index> m_pair_begin;       // contacts of pair s: [m_pair_begin[s], m_pair_begin[s+1])
+  std::vector<ContactElement> m_contacts;
+  FrictionParams m_friction;
   BlockPattern m_pattern;
   std::vector<char> m_fixed;
   VecX m_forces;

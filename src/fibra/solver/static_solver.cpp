@@ -82,6 +82,8 @@ StaticSolver::StaticSolver(const Case& c, const Model& model)
         m_length_scale[9 * (f.first_node + k) + d] = r;
       }
   }
+  if (c.contact.enabled) m_contact = std::make_unique<ContactManager>(model, c.contact);
+  m_q_start = m_q;
   m_linear->analyze(m_problem->pattern());
 }
 
@@ -113,8 +115,74 @@ std::vector<double> StaticSolver::reactions(const VecX& gradient) const {
 
 bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>& history, int& iterations,
                                    double& residual) {
-  const SolverSpec& opt = m_case.solver;
   apply(step, lambda);
+  m_contact_stats = ContactStats{};
+  if (!m_contact) return newton(history, iterations, residual);
+
+  // METHOD §4: (1) contact elements, repeated while the set changes; (2) normals, repeated
+  // while they turn; (3) Newton on the rest. A zone that penetrates too deep gets a stiffer
+  // penalty and the loops go on from the current state.
+  const ContactSpec& spec = m_contact->spec();
+  int total_iterations = 0;
+  auto detect = [&]() {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<ContactElement> fresh = m_contact->detect(m_q, m_q_start, m_problem->contacts());
+    ++m_contact_stats.detections;
+    m_contact_stats.detection_time += seconds_since(t0);
+    return fresh;
+  };
+  std::vector<ContactElement> contacts = detect();
+  for (int d = 0; d < spec.max_detections; ++d) {
+    if (m_problem->set_contacts(std::move(contacts), m_contact->friction())) m_linear->analyze(m_problem->pattern());
+    bool normals_settled = false;
+    for (int k = 0; k < spec.max_normal_updates; ++k) {
+      int its = 0;
+      if (!newton(history, its, residual)) {
+        iterations = total_iterations + its;
+        return false;
+      }
+      total_iterations += its;
+      ++m_contact_stats.normal_updates;
+      if (m_contact->update_normals(m_problem->contacts(), m_q) < spec.normal_tolerance) {
+        normals_settled = true;
+        break;
+      }
+    }
+    iterations = total_iterations;
+    if (!normals_settled) return false;
+    const std::vector<ContactResponse> responses = m_problem->contact_responses(m_q);
+    const int raised = m_contact->adapt_penalty(m_problem->contacts(), responses);
+    m_contact_stats.penalty_raises += raised;
+    // Detect again at the converged state: done when nothing new appears.
+    contacts = detect();
+    bool same = contacts.size() == m_problem->contacts().size();
+    for (size_t k = 0; same && k < contacts.size(); ++k) same = !contacts[k].fresh;
+    if (same && raised == 0) {
+      const std::vector<ContactResponse> final_responses = m_problem->contact_responses(m_q);
+      const ContactStats st = m_contact->stats(m_problem->contacts(), final_responses);
+      m_contact_stats.zones = st.zones;
+      m_contact_stats.elements = st.elements;
+      m_contact_stats.max_penetration_ratio = st.max_penetration_ratio;
+      m_contact_stats.total_normal_force = st.total_normal_force;
+      return true;
+    }
+    if (raised > 0) {
+      // Keep the current elements (with their raised penalties) and solve again.
+      contacts = m_problem->contacts();
+      continue;
+    }
+    // New elements: refuse those that start deep inside another fiber (a crossing missed
+    // between two detections); the increment is cut.
+    m_problem->set_contacts(contacts, m_contact->friction());
+    const std::vector<ContactResponse> fresh_responses = m_problem->contact_responses(m_q);
+    if (m_contact->passed_through(m_problem->contacts(), fresh_responses)) return false;
+    contacts = m_problem->contacts();
+  }
+  return false;
+}
+
+bool StaticSolver::newton(std::vector<double>& history, int& iterations, double& residual) {
+  const SolverSpec& opt = m_case.solver;
   const std::vector<char>& fixed = m_problem->fixed();
   const Index n = m_q.size();
   VecX r(n), dq(n), trial(n);
@@ -268,10 +336,13 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     const double nominal = 1.0 / st.increments;
     const int max_increments = st.max_increments > 0 ? st.max_increments : 100 * st.increments;
     double lambda = 0.0, dl = nominal;
+    auto t_increment = std::chrono::steady_clock::now();
     int done = 0, attempts = 0;
     while (lambda < 1.0 - 1e-12) {
       dl = std::min(dl, 1.0 - lambda);
       const VecX saved = m_q;
+      m_q_start = m_q;
+      const std::vector<ContactElement> saved_contacts = m_contact ? m_problem->contacts() : std::vector<ContactElement>{};
       std::vector<double> history;
       int iterations = 0;
       double residual = 0.0;
@@ -288,6 +359,8 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       }
       if (!ok) {
         m_q = saved;
+        if (m_contact && m_problem->set_contacts(saved_contacts, m_contact->friction()))
+          m_linear->analyze(m_problem->pattern());
         ++m_stats.cuts;
         const int cuts_here = static_cast<int>(std::round(std::log2(nominal / dl)));
         if (cuts_here >= opt.max_cuts || attempts >= max_increments) {
@@ -320,13 +393,19 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       info.iterations = iterations;
       info.residual = residual;
       info.wall_time = seconds_since(t_start);
+      info.increment_time = seconds_since(t_increment);
       info.step_end = lambda >= 1.0;
       info.reactions = reactions(m_gradient);
+      if (m_contact) {
+        m_contact->commit(m_problem->contacts(), m_problem->contact_responses(m_q), m_q);
+        info.contact = m_contact_stats;
+      }
       m_stats.time_assembly = m_problem->times().assembly;
       if (m_progress)
         m_progress(fmt::format("step {} \"{}\"  load {:6.4f}  iterations {:2d}  residual {:.2e}  {:7.2f} s", step + 1,
                                st.name, lambda, iterations, residual, info.wall_time));
       observer(info, m_q);
+      t_increment = std::chrono::steady_clock::now();
       // Grow after easy convergence, back towards the requested increment size.
       if (iterations <= 4) dl = std::min(nominal, dl * 1.5);
     }

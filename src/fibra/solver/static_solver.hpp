@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "fibra/contact/contact_manager.hpp"
 #include "fibra/model/case.hpp"
 #include "fibra/model/model.hpp"
 #include "fibra/solver/linear_solver.hpp"
@@ -24,8 +25,10 @@ struct IncrementInfo {
   int iterations = 0;          ///< Newton iterations of this increment
   double residual = 0;         ///< final relative residual
   double wall_time = 0;        ///< since the start of the run [s]
+  double increment_time = 0;   ///< spent on this increment, failed attempts included [s]
   bool step_end = false;       ///< last increment of its step
   std::vector<double> reactions;  ///< per reaction column (see reaction_columns())
+  ContactStats contact;           ///< contact statistics (zero without contact)
 };
 
 /// Counters and timings of a run.
@@ -68,6 +71,7 @@ class StaticSolver {
   RunResult run(const std::function<void(const IncrementInfo&, const VecX&)>& observer);
 
   const VecX& state() const { return m_q; }                        ///< current nodal values
+  bool has_contact() const { return m_contact != nullptr; }        ///< [contact] present
   const SolverStats& stats() const { return m_stats; }             ///< counters and timings
   const std::vector<std::string>& reaction_columns() const { return m_reaction_columns; }  ///< names
   Problem& problem() { return *m_problem; }                        ///< the assembled problem
@@ -77,6 +81,7 @@ class StaticSolver {
  private:
   struct Program;  // resolved loads and displacements per step
   bool solve_increment(int step, double lambda, std::vector<double>& history, int& iterations, double& residual);
+  bool newton(std::vector<double>& history, int& iterations, double& residual);
   void apply(int step, double lambda);
   std::vector<double> reactions(const VecX& gradient) const;
 
@@ -85,7 +90,10 @@ class StaticSolver {
   std::unique_ptr<Problem> m_problem;
   std::unique_ptr<LinearSolver> m_linear;
   std::unique_ptr<Program> m_program;
+  std::unique_ptr<ContactManager> m_contact;  // null without [contact]
+  ContactStats m_contact_stats;
   VecX m_q;
+  VecX m_q_start;  // state at the start of the current increment
   VecX m_gradient;
   std::vector<double> m_hessian;
   VecX m_force_scale;   // residual weights: 1 on x0, 1/radius on g

@@ -1,0 +1,178 @@
+#include "fibra/contact/contact_manager.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+
+#include "fibra/beam/beam_element.hpp"
+#include "fibra/contact/detection.hpp"
+
+namespace fibra {
+namespace {
+
+// Centre of the section of particle p (x0 at its eta) and the element dofs pointer.
+Vec3 section_centre(const Model& model, const Particle& p, const VecX& q) {
+  const Particle centre{p.element, p.eta, 0.0, 0.0};
+  return particle_position(centre, q.data() + model.elements[p.element].first_dof);
+}
+
+}  // namespace
+
+ContactManager::ContactManager(const Model& model, const ContactSpec& spec) : m_model(model), m_spec(spec) {
+  DetectionParams params;
+  params.margin = spec.margin;
+  params.spacing = spec.spacing;
+  params.self_exclusion = spec.self_exclusion;
+  m_detector = std::make_unique<ContactDetector>(model, params);
+  double r_min = 1e300, e_t = 1e300;
+  for (const Fiber& f : model.fibers) {
+    const Section& s = model.sections[f.section];
+    r_min = std::min(r_min, std::min(s.a, s.b));
+    const MaterialSpec& m = model.materials[f.material];
+    e_t = std::min(e_t, m.model == MaterialSpec::Model::Transverse ? m.young_transverse : m.young);
+  }
+  if (model.fibers.empty()) r_min = e_t = 1.0;
+  m_initial_stiffness = spec.stiffness > 0 ? spec.stiffness : 0.1 * e_t * r_min;
+  m_friction.mu = spec.friction;
+  m_friction.elastic_slip = spec.elastic_slip > 0 ? spec.elastic_slip : 1e-3 * r_min;
+}
+
+ContactManager::~ContactManager() = default;
+
+double ContactManager::pair_radius(const ContactElement& c) const {
+  const Section& sa = m_model.sections[m_model.fibers[m_model.elements[c.a.element].fiber].section];
+  const Section& sb = m_model.sections[m_model.fibers[m_model.elements[c.b.element].fiber].section];
+  return std::min({sa.a, sa.b, sb.a, sb.b});
+}
+
+double ContactManager::arc_length(const Particle& p) const {
+  const BeamElement& e = m_model.elements[p.element];
+  const Fiber& f = m_model.fibers[e.fiber];
+  const double h = f.length / static_cast<double>(f.num_elements);
+  return h * (static_cast<double>(p.element - f.first_element) + 0.5 * (p.eta + 1.0));
+}
+
+std::vector<ContactElement> ContactManager::detect(const VecX& q, const VecX& q_start,
+                                                   const std::vector<ContactElement>& previous) {
+  Detection det = m_detector->detect(q);
+  m_zones = static_cast<int>(det.zones.size());
+  // Previous elements by fiber pair, sorted by arc length on fiber a.
+  std::map<std::pair<int, int>, std::vector<std::pair<double, const ContactElement*>>> old;
+  for (const ContactElement& c : previous) {
+    const int fa = m_model.elements[c.a.element].fiber, fb = m_model.elements[c.b.element].fiber;
+    old[{fa, fb}].push_back({arc_length(c.a), &c});
+    if (fa != fb) old[{fb, fa}].push_back({arc_length(c.b), &c});
+  }
+  for (auto& [key, list] : old) std::sort(list.begin(), list.end(), [](auto& x, auto& y) { return x.first < y.first; });
+
+  // Zone stiffness: the largest matched previous stiffness in the zone, else the initial one.
+  std::vector<double> zone_k(det.zones.size(), 0.0);
+  std::vector<const ContactElement*> match(det.elements.size(), nullptr);
+  std::vector<bool> flipped(det.elements.size(), false);
+  for (size_t k = 0; k < det.elements.size(); ++k) {
+    ContactElement& c = det.elements[k];
+    const int fa = m_model.elements[c.a.element].fiber, fb = m_model.elements[c.b.element].fiber;
+    auto it = old.find({fa, fb});
+    if (it == old.end()) continue;
+    const double s = arc_length(c.a);
+    const double tol = 0.75 * (m_spec.spacing > 0 ? m_spec.spacing : pair_radius(c));
+    const auto& list = it->second;
+    auto pos = std::lower_bound(list.begin(), list.end(), s, [](auto& x, double v) { return x.first < v; });
+    double best = tol;
+    for (auto cand = (pos == list.begin() ? pos : pos - 1); cand != list.end() && cand <= pos; ++cand) {
+      if (std::abs(cand->first - s) <= best) {
+        best = std::abs(cand->first - s);
+        match[k] = cand->second;
+      }
+    }
+    if (match[k]) {
+      flipped[k] = m_model.elements[match[k]->a.element].fiber != fa;
+      zone_k[c.zone] = std::max(zone_k[c.zone], match[k]->law.stiffness);
+    }
+  }
+  for (size_t k = 0; k < det.elements.size(); ++k) {
+    ContactElement& c = det.elements[k];
+    const double allowed = m_spec.max_penetration * pair_radius(c);
+    c.law.stiffness = zone_k[c.zone] > 0 ? zone_k[c.zone] : m_initial_stiffness;
+    c.law.regularization = m_spec.regularization * allowed;
+    c.separation_previous = particle_position(c.b, q_start.data() + m_model.elements[c.b.element].first_dof) -
+                            particle_position(c.a, q_start.data() + m_model.elements[c.a.element].first_dof);
+    c.fresh = match[k] == nullptr;
+    if (match[k]) {
+      const Vec3 f = flipped[k] ? Vec3(-match[k]->friction_previous) : match[k]->friction_previous;
+      c.friction_previous = f - f.dot(c.normal) * c.normal;
+    } else {
+      c.friction_previous.setZero();
+    }
+  }
+  return std::move(det.elements);
+}
+
+double ContactManager::update_normals(std::vector<ContactElement>& contacts, const VecX& q) const {
+  double turn = 0.0;
+  for (ContactElement& c : contacts) {
+    const Vec3 d = section_centre(m_model, c.b, q) - section_centre(m_model, c.a, q);
+    const double len = d.norm();
+    if (len <= 0.0) continue;
+    const Vec3 n = d / len;
+    turn = std::max(turn, std::acos(std::clamp(n.dot(c.normal), -1.0, 1.0)));
+    c.normal = n;
+  }
+  return turn;
+}
+
+int ContactManager::adapt_penalty(std::vector<ContactElement>& contacts,
+                                  const std::vector<ContactResponse>& responses) const {
+  std::map<int, double> worst;  // zone -> largest penetration / allowed
+  for (size_t k = 0; k < contacts.size(); ++k) {
+    const double allowed = m_spec.max_penetration * pair_radius(contacts[k]);
+    const double ratio = -responses[k].gap / allowed;
+    auto [it, inserted] = worst.try_emplace(contacts[k].zone, ratio);
+    if (!inserted) it->second = std::max(it->second, ratio);
+  }
+  int raised = 0;
+  for (auto& [zone, ratio] : worst) {
+    if (ratio <= 1.0) continue;
+    ++raised;
+    // Penetration falls roughly as 1/k at a given force: aim at 70 % of the allowed one.
+    const double factor = std::min(100.0, ratio / 0.7);
+    for (ContactElement& c : contacts)
+      if (c.zone == zone) c.law.stiffness *= factor;
+  }
+  return raised;
+}
+
+void ContactManager::commit(std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses,
+                            const VecX& q) const {
+  for (size_t k = 0; k < contacts.size(); ++k) {
+    ContactElement& c = contacts[k];
+    c.friction_previous = responses[k].friction;
+    c.separation_previous = particle_position(c.b, q.data() + m_model.elements[c.b.element].first_dof) -
+                            particle_position(c.a, q.data() + m_model.elements[c.a.element].first_dof);
+    c.fresh = false;
+  }
+}
+
+bool ContactManager::passed_through(const std::vector<ContactElement>& contacts,
+                                    const std::vector<ContactResponse>& responses) const {
+  for (size_t k = 0; k < contacts.size(); ++k)
+    if (contacts[k].fresh && -responses[k].gap > 0.5 * pair_radius(contacts[k]) &&
+        -responses[k].gap > 4.0 * m_spec.max_penetration * pair_radius(contacts[k]))
+      return true;
+  return false;
+}
+
+ContactStats ContactManager::stats(const std::vector<ContactElement>& contacts,
+                                   const std::vector<ContactResponse>& responses) const {
+  ContactStats s;
+  s.zones = m_zones;
+  s.elements = static_cast<int>(contacts.size());
+  for (size_t k = 0; k < contacts.size(); ++k) {
+    s.max_penetration_ratio = std::max(s.max_penetration_ratio, -responses[k].gap / pair_radius(contacts[k]));
+    s.total_normal_force += responses[k].normal_force;
+  }
+  return s;
+}
+
+}  // namespace fibra

@@ -1,0 +1,71 @@
+#pragma once
+/// Contact bookkeeping between the solver's loops (METHOD §3-4): builds contact elements from a
+/// detection (laws, history carried over), updates normals, adapts the penalty per proximity
+/// zone, and commits friction history at convergence.
+#include <memory>
+#include <vector>
+
+#include "fibra/contact/contact_element.hpp"
+#include "fibra/model/case.hpp"
+#include "fibra/model/model.hpp"
+
+namespace fibra {
+
+struct Detection;
+class ContactDetector;
+
+/// Per-increment contact statistics (for history.csv).
+struct ContactStats {
+  int zones = 0;                     ///< proximity zones
+  int elements = 0;                  ///< contact elements
+  double max_penetration_ratio = 0;  ///< largest penetration / smaller radius of its pair
+  double total_normal_force = 0;     ///< sum of normal forces [N]
+  double detection_time = 0;         ///< time spent in detection during the increment [s]
+  int detections = 0;                ///< detection loops of the increment
+  int normal_updates = 0;            ///< normal-update loops of the increment
+  int penalty_raises = 0;            ///< zones whose penalty was raised in the increment
+};
+
+/// Contact state across increments.
+class ContactManager {
+ public:
+  /// Settings from the case's [contact] table; the model is kept by reference.
+  ContactManager(const Model& model, const ContactSpec& spec);
+  ~ContactManager();
+
+  /// Detects at q and returns the new contact elements: normals from the detection, penalty of
+  /// the matching previous element (or the initial one), friction history carried over from
+  /// `previous` (matched by fiber pair and arc length), separations measured at `q_start`.
+  std::vector<ContactElement> detect(const VecX& q, const VecX& q_start, const std::vector<ContactElement>& previous);
+  /// Sets each normal to the unit vector between its section centres at q; returns the largest
+  /// turn [rad].
+  double update_normals(std::vector<ContactElement>& contacts, const VecX& q) const;
+  /// Raises the penalty of every zone whose largest penetration exceeds the allowed one; returns
+  /// the number of zones raised.
+  int adapt_penalty(std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses) const;
+  /// Stores the converged friction forces and separations as history.
+  void commit(std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses,
+              const VecX& q) const;
+  /// True if a contact element without history penetrates deeper than a fiber can within one
+  /// increment (a crossing missed between detections).
+  bool passed_through(const std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses) const;
+  /// Statistics of contacts at their responses.
+  ContactStats stats(const std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses) const;
+  /// Friction parameters.
+  FrictionParams friction() const { return m_friction; }
+  const ContactSpec& spec() const { return m_spec; }  ///< settings
+  int zones() const { return m_zones; }               ///< zones of the last detection
+
+ private:
+  double pair_radius(const ContactElement& c) const;  // smaller section radius of the pair
+  double arc_length(const Particle& p) const;         // reference arc length along its fiber
+
+  const Model& m_model;
+  ContactSpec m_spec;
+  FrictionParams m_friction;
+  std::unique_ptr<ContactDetector> m_detector;
+  double m_initial_stiffness = 0;
+  int m_zones = 0;
+};
+
+}  // namespace fibra

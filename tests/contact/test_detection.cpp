@@ -1,0 +1,545 @@
+// Contact detection: broad phase against brute force, and proximity zones / contact elements
+// on the geometric cases the method must handle: crossings (also at the end of a fiber and
+// between radii 1:10), parallel and nearly parallel fibers, a tangent arc, a helix wound
+// around a straight fiber, self-contact of a coiled fiber and of a self-crossing path, none
+// between neighbouring elements; deterministic for any thread count.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <omp.h>
+#include <random>
+#include <set>
+#include <utility>
+
+#include "fibra/contact/broad_phase.hpp"
+#include "fibra/contact/detection.hpp"
+#include "fibra/model/model.hpp"
+
+namespace fibra {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+Case base_case() {
+  Case c;
+  MaterialSpec m;
+  m.name = "m";
+  m.young = 1e9;
+  m.poisson = 0.3;
+  c.materials.push_back(m);
+  return c;
+}
+
+FiberSpec polyline(const std::string& name, std::vector<Vec3> points, double r, int elements) {
+  FiberSpec f;
+  f.name = name;
+  f.material = "m";
+  f.radius = r;
+  f.path.kind = PathSpec::Kind::Polyline;
+  f.path.points = std::move(points);
+  f.elements = elements;
+  return f;
+}
+
+FiberSpec helix(const std::string& name, double radius, double pitch, double turns, double r, int elements) {
+  FiberSpec f;
+  f.name = name;
+  f.material = "m";
+  f.radius = r;
+  f.path.kind = PathSpec::Kind::Helix;
+  f.path.center = Vec3::Zero();
+  f.path.axis = Vec3::UnitZ();
+  f.path.radius = radius;
+  f.path.pitch = pitch;
+  f.path.turns = turns;
+  f.elements = elements;
+  return f;
+}
+
+const double* element_dofs(const Model& model, const VecX& q, Index e) {
+  return q.data() + model.elements[e].first_dof;
+}
+Vec3 position(const Model& model, const VecX& q, const Particle& p) {
+  return particle_position(p, element_dofs(model, q, p.element));
+}
+Vec3 centre(const Model& model, const VecX& q, const Particle& p) {
+  return particle_position(Particle{p.element, p.eta, 0.0, 0.0}, element_dofs(model, q, p.element));
+}
+double gap(const Model& model, const VecX& q, const ContactElement& c) {
+  return (position(model, q, c.b) - position(model, q, c.a)).dot(c.normal);
+}
+
+// Checks shared by every case: zones and elements consistent, particles on the section borders
+// facing each other, normal from centre a to centre b.
+void check_consistency(const Model& model, const VecX& q, const Detection& det, double border_tolerance = 1e-12,
+                       double facing = 0.7) {
+  int expected_first = 0;
+  for (size_t z = 0; z < det.zones.size(); ++z) {
+    const ProximityZone& zone = det.zones[z];
+    EXPECT_EQ(zone.first_element, expected_first);
+    EXPECT_GE(zone.num_elements, 1);
+    EXPECT_LE(zone.fiber_i, zone.fiber_j);
+    EXPECT_LE(zone.s_begin, zone.s_end);
+    expected_first += zone.num_elements;
+    if (z > 0) {
+      const ProximityZone& prev = det.zones[z - 1];
+      EXPECT_TRUE(std::make_pair(prev.fiber_i, prev.fiber_j) < std::make_pair(zone.fiber_i, zone.fiber_j) ||
+                  (prev.fiber_i == zone.fiber_i && prev.fiber_j == zone.fiber_j && prev.s_begin <= zone.s_begin));
+    }
+    for (int k = zone.first_element; k < zone.first_element + zone.num_elements; ++k) {
+      const ContactElement& c = det.elements[k];
+      EXPECT_EQ(c.zone, static_cast<int>(z));
+      EXPECT_EQ(model.elements[c.a.element].fiber, zone.fiber_i);
+      EXPECT_EQ(model.elements[c.b.element].fiber, zone.fiber_j);
+    }
+  }
+  EXPECT_EQ(expected_first, static_cast<int>(det.elements.size()));
+  for (const ContactElement& c : det.elements) {
+    EXPECT_GE(c.a.eta, -1.0);
+    EXPECT_LE(c.a.eta, 1.0);
+    EXPECT_GE(c.b.eta, -1.0);
+    EXPECT_LE(c.b.eta, 1.0);
+    EXPECT_NEAR(c.normal.norm(), 1.0, 1e-12);
+    const Section& sa = model.sections[model.elements[c.a.element].section];
+    const Section& sb = model.sections[model.elements[c.b.element].section];
+    const Vec3 ca = centre(model, q, c.a), cb = centre(model, q, c.b);
+    // On the border of the section in material coordinates; at distance r from the centre
+    // (the interpolated section vectors of curved fibers are unit only at the nodes).
+    EXPECT_NEAR(std::hypot(c.a.xi1 / sa.a, c.a.xi2 / sa.b), 1.0, 1e-12);
+    EXPECT_NEAR(std::hypot(c.b.xi1 / sb.a, c.b.xi2 / sb.b), 1.0, 1e-12);
+    EXPECT_NEAR((position(model, q, c.a) - ca).norm(), sa.a, border_tolerance * sa.a);
+    EXPECT_NEAR((position(model, q, c.b) - cb).norm(), sb.a, border_tolerance * sb.a);
+    EXPECT_NEAR((cb - ca).normalized().dot(c.normal), 1.0, 1e-9);
+    // Each particle faces the other section: along +N on a, along -N on b, up to the tilt of
+    // the section plane, at most 45 degrees from the cutting plane on smooth fibers (more at
+    // the kinks between elements of sharply bent ones).
+    EXPECT_GT((position(model, q, c.a) - ca).dot(c.normal), facing * sa.a);
+    EXPECT_GT((position(model, q, c.b) - cb).dot(-c.normal), facing * sb.a);
+  }
+}
+
+// Two straight fibers crossing at `angle`, centre distance d, both rigidly moved by `rot` and `shift`.
+struct Crossing {
+  Model model;
+  Mat3 rot;
+  Vec3 shift;
+};
+
+Crossing make_crossing(double r_i, double r_j, double d, double angle, const Mat3& rot, const Vec3& shift,
+                       double half_length, int elements, double end_j = 0) {
+  Case c = base_case();
+  const Vec3 dir_j(std::cos(angle), std::sin(angle), 0.0);
+  const Vec3 end = end_j != 0 ? Vec3(Vec3(0, 0, d) + end_j * dir_j) : Vec3(Vec3(0, 0, d) + half_length * dir_j);
+  c.fibers.push_back(polyline("i", {rot * Vec3(-half_length, 0, 0) + shift, rot * Vec3(half_length, 0, 0) + shift},
+                              r_i, elements));
+  c.fibers.push_back(polyline("j", {rot * (Vec3(0, 0, d) - half_length * dir_j) + shift, rot * end + shift}, r_j,
+                              elements));
+  return {build_model(c), rot, shift};
+}
+
+TEST(Detection, CrossingGivesOneShortZoneAtTheCommonPerpendicular) {
+  const double r = 1e-3, eps = 1e-3 * r;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 6; ++trial) {
+    const double angle = trial == 0 ? 0.5 * kPi : (0.3 + 0.2 * trial) * 0.5 * kPi;
+    const Mat3 rot = trial == 0 ? Mat3::Identity()
+                                : Eigen::AngleAxisd(3 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()).toRotationMatrix();
+    const Vec3 shift = trial == 0 ? Vec3::Zero() : Vec3(u(rng), u(rng), u(rng));
+    const Crossing x = make_crossing(r, r, 2 * r - eps, angle, rot, shift, 20 * r, 20);
+    ContactDetector detector(x.model);
+    const VecX& q = x.model.reference;
+    const Detection det = detector.detect(q);
+    check_consistency(x.model, q, det);
+    ASSERT_EQ(det.zones.size(), 1u) << trial;
+    EXPECT_EQ(det.zones[0].fiber_i, 0);
+    EXPECT_EQ(det.zones[0].fiber_j, 1);
+    EXPECT_GE(det.elements.size(), 1u);
+    EXPECT_LE(det.elements.size(), 3u);
+    const Vec3 perp = rot * Vec3::UnitZ();
+    const ContactElement* central = nullptr;
+    for (const ContactElement& c : det.elements) {
+      // Near the crossing; normal close to the common perpendicular.
+      EXPECT_LT((centre(x.model, q, c.a) - shift).norm(), 1.5 * r) << trial;
+      EXPECT_GT(c.normal.dot(perp), 0.75) << trial;
+      if (!central || c.normal.dot(perp) > central->normal.dot(perp)) central = &c;
+    }
+    // One element at the closest approach: normal along the common perpendicular, gap -eps.
+    EXPECT_GT(central->normal.dot(perp), 1 - 1e-4) << trial;
+    EXPECT_NEAR(gap(x.model, q, *central), -eps, 2e-4 * r) << trial;
+    EXPECT_LT((centre(x.model, q, central->a) - shift).norm(), 0.05 * r) << trial;
+    // The zone is centred on the crossing and short.
+    EXPECT_NEAR(0.5 * (det.zones[0].s_begin + det.zones[0].s_end), 20 * r, 0.5 * r);
+    EXPECT_LE(det.zones[0].s_end - det.zones[0].s_begin, 4.5 * r / std::sin(angle));
+  }
+}
+
+TEST(Detection, ParallelTouchingFibersGiveOneUniformContactLine) {
+  const double r = 1e-4, length = 100 * r;
+  Case c = base_case();
+  c.fibers.push_back(polyline("a", {Vec3(0, 0, 0), Vec3(length, 0, 0)}, r, 20));
+  c.fibers.push_back(polyline("b", {Vec3(0, 2 * r, 0), Vec3(length, 2 * r, 0)}, r, 20));
+  const Model model = build_model(c);
+  ContactDetector detector(model);
+  const VecX& q = model.reference;
+  const Detection det = detector.detect(q);
+  check_consistency(model, q, det);
+  ASSERT_EQ(det.zones.size(), 1u);
+  EXPECT_LT(det.zones[0].s_begin, 0.01 * length);
+  EXPECT_GT(det.zones[0].s_end, 0.99 * length);
+  const int n = static_cast<int>(det.elements.size());
+  EXPECT_NEAR(n, length / r, 1.0);
+  std::vector<double> xs;
+  for (const ContactElement& e : det.elements) {
+    xs.push_back(centre(model, q, e.a).x());
+    EXPECT_NEAR(e.normal.dot(Vec3::UnitY()), 1.0, 1e-12);  // perpendicular to the fibers
+    EXPECT_NEAR(gap(model, q, e), 0.0, 1e-12 * r);
+    EXPECT_NEAR(centre(model, q, e.b).x(), xs.back(), 1e-12 * length);  // same cross-section
+  }
+  for (int k = 1; k < n; ++k) EXPECT_NEAR(xs[k] - xs[k - 1], length / n, 1e-9 * length);
+  EXPECT_NEAR(xs.front(), 0.5 * length / n, 1e-9 * length);
+}
+
+TEST(Detection, FarFibersHaveNoZoneAndNoCandidate) {
+  const double r = 1e-4;
+  Case c = base_case();
+  c.fibers.push_back(polyline("a", {Vec3(0, 0, 0), Vec3(0.01, 0, 0)}, r, 20));
+  c.fibers.push_back(polyline("b", {Vec3(0, 5 * r, 0), Vec3(0.01, 5 * r, 0)}, r, 20));
+  c.fibers.push_back(polyline("c", {Vec3(0.005, -0.005, 3.1 * r), Vec3(0.005, 0.005, 3.1 * r)}, r, 20));
+  const Model model = build_model(c);
+  ContactDetector detector(model);
+  const Detection det = detector.detect(model.reference);
+  EXPECT_TRUE(det.zones.empty());
+  EXPECT_TRUE(det.elements.empty());
+  // Only the crossing of c over a and b gives candidates (c passes 3.1 r above a).
+  for (const ElementPair& p : detector.broad_phase().pairs()) EXPECT_EQ(model.elements[p.second].fiber, 2);
+}
+
+TEST(Detection, ReusedDetectorFollowsTheMotion) {
+  const double r = 1e-4;
+  Case c = base_case();
+  c.fibers.push_back(polyline("a", {Vec3(0, 0, 0), Vec3(0.01, 0, 0)}, r, 20));
+  c.fibers.push_back(polyline("b", {Vec3(0, 5 * r, 0), Vec3(0.01, 5 * r, 0)}, r, 20));
+  const Model model = build_model(c);
+  ContactDetector detector(model);
+  VecX q = model.reference;
+  Detection det;
+  for (int pass = 0; pass < 3; ++pass) {
+    detector.detect(q, det);
+    EXPECT_TRUE(det.zones.empty());
+    // Move fiber b down to touch a.
+    VecX moved = q;
+    for (Index k = model.fibers[1].first_node; k < model.fibers[1].first_node + model.fibers[1].num_nodes; ++k)
+      moved[9 * k + 1] -= 3 * r;
+    detector.detect(moved, det);
+    ASSERT_EQ(det.zones.size(), 1u);
+    EXPECT_NEAR(det.elements.size(), 100.0, 1.0);
+  }
+}
+
+TEST(Detection, CrossingAtTheEndOfAFiberIsClipped) {
+  const double r = 1e-3, eps = 1e-3 * r;
+  // Fiber j ends half a radius past the crossing: elements only within it.
+  {
+    const Crossing x = make_crossing(r, r, 2 * r - eps, 0.5 * kPi, Mat3::Identity(), Vec3::Zero(), 20 * r, 20, 0.5 * r);
+    ContactDetector detector(x.model);
+    const VecX& q = x.model.reference;
+    const Detection det = detector.detect(q);
+    check_consistency(x.model, q, det);
+    ASSERT_EQ(det.zones.size(), 1u);
+    for (const ContactElement& c : det.elements) EXPECT_LE(centre(x.model, q, c.b).y(), 0.5 * r + 1e-12);
+  }
+  // Fiber j ends 3 r before fiber i: no contact.
+  {
+    const Crossing x = make_crossing(r, r, 2 * r - eps, 0.5 * kPi, Mat3::Identity(), Vec3::Zero(), 20 * r, 20, -3 * r);
+    ContactDetector detector(x.model);
+    EXPECT_TRUE(detector.detect(x.model.reference).zones.empty());
+  }
+  // Parallel fibers overlapping on half their length: one zone on the overlap only.
+  {
+    const double length = 0.02;
+    Case c = base_case();
+    c.fibers.push_back(polyline("a", {Vec3(0, 0, 0), Vec3(length, 0, 0)}, r, 10));
+    c.fibers.push_back(polyline("b", {Vec3(0.5 * length, 2 * r, 0), Vec3(1.5 * length, 2 * r, 0)}, r, 10));
+    const Model model = build_model(c);
+    ContactDetector detector(model);
+    const VecX& q = model.reference;
+    const Detection det = detector.detect(q);
+    check_consistency(model, q, det);
+    ASSERT_EQ(det.zones.size(), 1u);
+    EXPECT_NEAR(det.zones[0].s_begin, 0.5 * length, 2 * r);
+    EXPECT_NEAR(det.zones[0].s_end, length, 1e-12);
+    EXPECT_NEAR(det.elements.size(), 0.5 * length / r, 2.0);
+    for (const ContactElement& e : det.elements) {
+      EXPECT_GE(centre(model, q, e.a).x(), 0.5 * length - 1e-12);
+      EXPECT_GE(centre(model, q, e.b).x(), 0.5 * length - 1e-12);
+      EXPECT_NEAR(e.normal.dot(Vec3::UnitY()), 1.0, 1e-12);
+    }
+  }
+}
+
+TEST(Detection, RadiiOneToTen) {
+  const double r = 1e-4, big = 10 * r;
+  // Thin fiber across a thick one (both orders of the fibers).
+  for (int order = 0; order < 2; ++order) {
+    const double r_i = order == 0 ? big : r, r_j = order == 0 ? r : big;
+    const Crossing x = make_crossing(r_i, r_j, big + r - 1e-3 * r, 0.5 * kPi, Mat3::Identity(), Vec3::Zero(), 40 * r, 20);
+    ContactDetector detector(x.model);
+    const VecX& q = x.model.reference;
+    const Detection det = detector.detect(q);
+    check_consistency(x.model, q, det);
+    ASSERT_EQ(det.zones.size(), 1u);
+    EXPECT_GE(det.elements.size(), 1u);
+    EXPECT_LE(det.elements.size(), 6u);
+    for (const ContactElement& c : det.elements) {
+      EXPECT_GT(c.normal.z(), 0.95);
+      EXPECT_LT(centre(x.model, q, c.a).head<2>().norm(), 3 * r);
+    }
+  }
+  // Thin fiber along a thick one: a contact line with the thin fiber's spacing.
+  const double length = 200 * r;
+  Case c = base_case();
+  c.fibers.push_back(polyline("thick", {Vec3(0, 0, 0), Vec3(length, 0, 0)}, big, 10));
+  c.fibers.push_back(polyline("thin", {Vec3(0, big + r, 0), Vec3(length, big + r, 0)}, r, 40));
+  const Model model = build_model(c);
+  ContactDetector detector(model);
+  const Detection det = detector.detect(model.reference);
+  check_consistency(model, model.reference, det);
+  ASSERT_EQ(det.zones.size(), 1u);
+  EXPECT_NEAR(det.elements.size(), length / r, 1.0);
+  for (const ContactElement& e : det.elements) EXPECT_NEAR(e.normal.dot(Vec3::UnitY()), 1.0, 1e-12);
+}
+
+TEST(Detection, NearlyParallelAndTangentFibers) {
+  const double r = 1e-4, eps = 1e-3 * r;
+  // Crossing at 2 degrees: one long zone, elements in order along it.
+  {
+    const Crossing x = make_crossing(r, r, 2 * r - eps, 2 * kPi / 180, Mat3::Identity(), Vec3::Zero(), 100 * r, 40);
+    ContactDetector detector(x.model);
+    const VecX& q = x.model.reference;
+    const Detection det = detector.detect(q);
+    check_consistency(x.model, q, det);
+    ASSERT_EQ(det.zones.size(), 1u);
+    // Zone length about 2 sqrt((2.5 r)^2 - (2 r)^2) / sin(2 deg) = 86 r.
+    EXPECT_NEAR(det.zones[0].s_end - det.zones[0].s_begin, 3 * r / std::sin(2 * kPi / 180), 5 * r);
+    EXPECT_GT(det.elements.size(), 30u);
+    double prev = -1e300, best = -1;
+    for (const ContactElement& c : det.elements) {
+      const double xa = centre(x.model, q, c.a).x();
+      EXPECT_GT(xa, prev);
+      prev = xa;
+      best = std::max(best, c.normal.z());
+      EXPECT_NEAR(gap(x.model, q, c), (centre(x.model, q, c.b) - centre(x.model, q, c.a)).norm() - 2 * r, 1e-3 * r);
+    }
+    EXPECT_GT(best, 0.999);
+  }
+  // Exactly parallel fibers at the proximity threshold minus a little: still one line.
+  {
+    Case c = base_case();
+    c.fibers.push_back(polyline("a", {Vec3(0, 0, 0), Vec3(50 * r, 0, 0)}, r, 10));
+    c.fibers.push_back(polyline("b", {Vec3(0, 0, 2.49 * r), Vec3(50 * r, 0, 2.49 * r)}, r, 10));
+    const Model model = build_model(c);
+    ContactDetector detector(model);
+    const Detection det = detector.detect(model.reference);
+    check_consistency(model, model.reference, det);
+    ASSERT_EQ(det.zones.size(), 1u);
+    EXPECT_NEAR(det.elements.size(), 50.0, 1.0);
+  }
+  // An arc of radius 50 r touching a straight fiber at its lowest point.
+  {
+    Case c = base_case();
+    c.fibers.push_back(polyline("line", {Vec3(-30 * r, 0, 0), Vec3(30 * r, 0, 0)}, r, 30));
+    FiberSpec arc;
+    arc.name = "arc";
+    arc.material = "m";
+    arc.radius = r;
+    arc.path.kind = PathSpec::Kind::Arc;
+    arc.path.center = Vec3(0, 0, 52 * r);
+    arc.path.axis = Vec3::UnitY();
+    arc.path.radius = 50 * r;
+    arc.path.start_angle = 0;
+    arc.path.angle = kPi;
+    arc.elements = 80;
+    c.fibers.push_back(arc);
+    const Model model = build_model(c);
+    ContactDetector detector(model);
+    const VecX& q = model.reference;
+    const Detection det = detector.detect(q);
+    check_consistency(model, q, det, 1e-3);
+    ASSERT_EQ(det.zones.size(), 1u);
+    // Zone half-length sqrt(2 * 50 r * 0.5 r) = 7.1 r on the line.
+    EXPECT_NEAR(det.zones[0].s_end - det.zones[0].s_begin, 14.1 * r, 2 * r);
+    EXPECT_NEAR(0.5 * (det.zones[0].s_end + det.zones[0].s_begin), 30 * r, 0.5 * r);
+    EXPECT_GE(det.elements.size(), 10u);
+    EXPECT_LE(det.elements.size(), 18u);
+    const ContactElement& mid = det.elements[det.elements.size() / 2];
+    EXPECT_GT(mid.normal.z(), 0.99);
+  }
+}
+
+TEST(Detection, HelixWoundAroundAStraightFiberTouchesAllAlong) {
+  const double r = 1e-4, radius = 2 * r, pitch = 2 * kPi * radius, turns = 2;
+  Case c = base_case();
+  c.fibers.push_back(polyline("core", {Vec3(0, 0, -2 * r), Vec3(0, 0, turns * pitch + 2 * r)}, r, 20));
+  c.fibers.push_back(helix("wrap", radius, pitch, turns, r, 48));
+  const Model model = build_model(c);
+  ContactDetector detector(model);
+  const VecX& q = model.reference;
+  const Detection det = detector.detect(q);
+  check_consistency(model, q, det, 1e-3);
+  ASSERT_GE(det.zones.size(), 1u);
+  EXPECT_LE(det.zones.size(), 2u);
+  double covered = 0;
+  for (const ProximityZone& z : det.zones) covered += z.s_end - z.s_begin;
+  EXPECT_GT(covered, 0.95 * turns * pitch);
+  // Intermediate curve: helix of radius r and the same pitch.
+  const double intermediate = turns * std::hypot(2 * kPi * r, pitch);
+  EXPECT_NEAR(static_cast<double>(det.elements.size()), intermediate / r, 0.1 * intermediate / r);
+  for (const ContactElement& e : det.elements) {
+    EXPECT_NEAR(gap(model, q, e), 0.0, 0.02 * r);
+    EXPECT_LT(std::abs(e.normal.z()), 0.05);
+  }
+}
+
+TEST(Detection, SelfContactOfACoilButNotOfNeighbouringElements) {
+  const double r = 1e-4;
+  // Two turns with pitch 2 r: consecutive turns touch over one turn.
+  {
+    const double radius = 5 * r, pitch = 2 * r;
+    Case c = base_case();
+    c.fibers.push_back(helix("coil", radius, pitch, 2, r, 60));
+    const Model model = build_model(c);
+    ContactDetector detector(model);
+    const VecX& q = model.reference;
+    const Detection det = detector.detect(q);
+    check_consistency(model, q, det, 1e-3);
+    ASSERT_EQ(det.zones.size(), 1u);
+    EXPECT_EQ(det.zones[0].fiber_i, 0);
+    EXPECT_EQ(det.zones[0].fiber_j, 0);
+    const double turn = std::hypot(2 * kPi * radius, pitch);
+    EXPECT_LT(det.zones[0].s_begin, 0.05 * turn);
+    EXPECT_NEAR(det.zones[0].s_end, turn, 0.05 * turn);
+    EXPECT_NEAR(static_cast<double>(det.elements.size()), turn / r, 0.1 * turn / r);
+    for (const ContactElement& e : det.elements) {
+      EXPECT_GT(e.normal.z(), 0.99);
+      EXPECT_NEAR(gap(model, q, e), 0.0, 0.02 * r);
+      EXPECT_LT(e.a.element, e.b.element);
+    }
+  }
+  // A path crossing itself (a loop closed by a crossing, 40 r of fiber between).
+  {
+    const double d = 2 * r - 1e-3 * r;
+    Case c = base_case();
+    c.fibers.push_back(polyline("loop",
+                                {Vec3(0, 0, 0), Vec3(20 * r, 0, 0), Vec3(20 * r, 10 * r, 0), Vec3(10 * r, 10 * r, d),
+                                 Vec3(10 * r, -10 * r, d)},
+                                r, 70));
+    const Model model = build_model(c);
+    ContactDetector detector(model);
+    const VecX& q = model.reference;
+    const Detection det = detector.detect(q);
+    check_consistency(model, q, det);
+    ASSERT_EQ(det.zones.size(), 1u);
+    EXPECT_LE(det.elements.size(), 3u);
+    for (const ContactElement& e : det.elements) {
+      EXPECT_LT((centre(model, q, e.a) - Vec3(10 * r, 0, 0)).norm(), 1.5 * r);
+      EXPECT_GT(e.normal.z(), 0.95);
+    }
+  }
+  // A straight fiber with elements shorter than the radius: no self-contact at all.
+  {
+    Case c = base_case();
+    c.fibers.push_back(polyline("straight", {Vec3(0, 0, 0), Vec3(50 * r, 0, 0)}, r, 100));
+    const Model model = build_model(c);
+    ContactDetector detector(model);
+    const Detection det = detector.detect(model.reference);
+    EXPECT_TRUE(det.zones.empty());
+    EXPECT_TRUE(detector.broad_phase().pairs().empty());
+  }
+}
+
+// 200 short, slightly bent fibers of various radii at random, plus a few coils (self pairs).
+Model random_cloud(unsigned seed, double box) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  Case c = base_case();
+  for (int k = 0; k < 200; ++k) {
+    const double r = 2e-5 + 8e-5 * u(rng);
+    const double len = 2e-4 + 8e-4 * u(rng);
+    const Vec3 a(box * u(rng), box * u(rng), box * u(rng));
+    const Vec3 dir = Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized();
+    const Vec3 bend = 0.2 * len * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
+    c.fibers.push_back(polyline("f" + std::to_string(k), {a, a + 0.5 * len * dir + bend, a + len * dir}, r,
+                                2 + static_cast<int>(3 * u(rng))));
+  }
+  for (int k = 0; k < 5; ++k) {
+    FiberSpec h = helix("h" + std::to_string(k), 3e-4, 1.5e-4, 2, 5e-5, 30);
+    h.path.center = Vec3(box * u(rng), box * u(rng), box * u(rng));
+    c.fibers.push_back(h);
+  }
+  return build_model(c);
+}
+
+TEST(BroadPhase, CandidatePairsEqualBruteForce) {
+  for (double box : {2e-3, 5e-3}) {
+    const Model model = random_cloud(11, box);
+    BroadPhase broad(model);
+    const std::vector<ElementPair> pairs = broad.find_pairs(model.reference);
+    const Index n = static_cast<Index>(model.elements.size());
+    std::vector<ElementPair> brute;
+    for (Index a = 0; a < n; ++a)
+      for (Index b = a + 1; b < n; ++b)
+        if (broad.boxes()[a].overlaps(broad.boxes()[b]) && !broad.excluded(a, b)) brute.push_back({a, b});
+    EXPECT_GT(brute.size(), 50u);
+    EXPECT_EQ(pairs.size(), brute.size());
+    EXPECT_TRUE(pairs == brute);
+    // Same-fiber pairs exist (the coils), none closer than the exclusion length.
+    int self = 0;
+    for (const ElementPair& p : pairs) self += model.elements[p.first].fiber == model.elements[p.second].fiber;
+    EXPECT_GT(self, 0);
+    // Boxes contain the curves inflated by the radius.
+    for (Index e = 0; e < n; ++e) {
+      const CentroidCurve curve = centroid_curve(model.reference.data() + model.elements[e].first_dof);
+      for (double eta = -1; eta <= 1; eta += 0.125) {
+        const Vec3 x = curve.value(eta);
+        const double r = broad.info(e).radius;
+        EXPECT_TRUE((x.array() - r >= broad.boxes()[e].lo.array()).all() &&
+                    (x.array() + r <= broad.boxes()[e].hi.array()).all());
+      }
+    }
+  }
+}
+
+TEST(Detection, DeterministicForAnyThreadCount) {
+  const Model model = random_cloud(5, 1.5e-3);
+  const int saved = omp_get_max_threads();
+  Detection runs[2];
+  for (int t = 0; t < 2; ++t) {
+    omp_set_num_threads(t == 0 ? 1 : 3);
+    ContactDetector detector(model);
+    runs[t] = detector.detect(model.reference);
+  }
+  omp_set_num_threads(saved);
+  check_consistency(model, model.reference, runs[0], 0.05, 0.25);
+  EXPECT_GT(runs[0].zones.size(), 10u);
+  ASSERT_EQ(runs[0].zones.size(), runs[1].zones.size());
+  ASSERT_EQ(runs[0].elements.size(), runs[1].elements.size());
+  for (size_t k = 0; k < runs[0].zones.size(); ++k) {
+    EXPECT_EQ(runs[0].zones[k].s_begin, runs[1].zones[k].s_begin);
+    EXPECT_EQ(runs[0].zones[k].first_element, runs[1].zones[k].first_element);
+  }
+  for (size_t k = 0; k < runs[0].elements.size(); ++k) {
+    const ContactElement &a = runs[0].elements[k], &b = runs[1].elements[k];
+    EXPECT_EQ(a.a.element, b.a.element);
+    EXPECT_EQ(a.b.element, b.b.element);
+    EXPECT_EQ(a.a.eta, b.a.eta);
+    EXPECT_EQ(a.b.xi1, b.b.xi1);
+    EXPECT_EQ(a.normal, b.normal);
+  }
+}
+
+}  // namespace
+}  // namespace fibra
