@@ -5,11 +5,11 @@
 // between neighbouring elements; deterministic for any thread count.
 #include <gtest/gtest.h>
 
+#include <omp.h>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <omp.h>
 #include <random>
 #include <set>
 #include <utility>
@@ -20,6 +20,15 @@
 
 namespace fibra {
 namespace {
+
+// Detection parameters with contact elements every (smallest) radius; the default spacing is
+// at least half an element, which these tests' coarse meshes would make sparse.
+DetectionParams radius_spacing(const Model& model) {
+  DetectionParams p;
+  p.spacing = 1e300;
+  for (const Section& sec : model.sections) p.spacing = std::min({p.spacing, sec.a, sec.b});
+  return p;
+}
 
 constexpr double kPi = std::numbers::pi;
 
@@ -33,29 +42,31 @@ Case base_case() {
   return c;
 }
 
-FiberSpec polyline(const std::string& name, std::vector<Vec3> points, double r, int elements) {
+// A fiber of material "m" (names moved in whole: GCC 12 warns falsely on literal assignment).
+FiberSpec fiber(std::string name, double r, int elements) {
   FiberSpec f;
-  f.name = name;
-  f.material = "m";
+  f.name = std::move(name);
+  f.material = std::string("m");
   f.radius = r;
-  f.path.kind = PathSpec::Kind::Polyline;
-  f.path.points = std::move(points);
   f.elements = elements;
   return f;
 }
 
-FiberSpec helix(const std::string& name, double radius, double pitch, double turns, double r, int elements) {
-  FiberSpec f;
-  f.name = name;
-  f.material = "m";
-  f.radius = r;
+FiberSpec polyline(std::string name, std::vector<Vec3> points, double r, int elements) {
+  FiberSpec f = fiber(std::move(name), r, elements);
+  f.path.kind = PathSpec::Kind::Polyline;
+  f.path.points = std::move(points);
+  return f;
+}
+
+FiberSpec helix(std::string name, double radius, double pitch, double turns, double r, int elements) {
+  FiberSpec f = fiber(std::move(name), r, elements);
   f.path.kind = PathSpec::Kind::Helix;
   f.path.center = Vec3::Zero();
   f.path.axis = Vec3::UnitZ();
   f.path.radius = radius;
   f.path.pitch = pitch;
   f.path.turns = turns;
-  f.elements = elements;
   return f;
 }
 
@@ -133,10 +144,10 @@ Crossing make_crossing(double r_i, double r_j, double d, double angle, const Mat
   Case c = base_case();
   const Vec3 dir_j(std::cos(angle), std::sin(angle), 0.0);
   const Vec3 end = end_j != 0 ? Vec3(Vec3(0, 0, d) + end_j * dir_j) : Vec3(Vec3(0, 0, d) + half_length * dir_j);
-  c.fibers.push_back(polyline("i", {rot * Vec3(-half_length, 0, 0) + shift, rot * Vec3(half_length, 0, 0) + shift},
-                              r_i, elements));
-  c.fibers.push_back(polyline("j", {rot * (Vec3(0, 0, d) - half_length * dir_j) + shift, rot * end + shift}, r_j,
-                              elements));
+  c.fibers.push_back(
+      polyline("i", {rot * Vec3(-half_length, 0, 0) + shift, rot * Vec3(half_length, 0, 0) + shift}, r_i, elements));
+  c.fibers.push_back(
+      polyline("j", {rot * (Vec3(0, 0, d) - half_length * dir_j) + shift, rot * end + shift}, r_j, elements));
   return {build_model(c), rot, shift};
 }
 
@@ -146,8 +157,9 @@ TEST(Detection, CrossingGivesOneShortZoneAtTheCommonPerpendicular) {
   std::uniform_real_distribution<double> u(-1, 1);
   for (int trial = 0; trial < 6; ++trial) {
     const double angle = trial == 0 ? 0.5 * kPi : (0.3 + 0.2 * trial) * 0.5 * kPi;
-    const Mat3 rot = trial == 0 ? Mat3::Identity()
-                                : Eigen::AngleAxisd(3 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()).toRotationMatrix();
+    const Mat3 rot = trial == 0
+                         ? Mat3::Identity()
+                         : Eigen::AngleAxisd(3 * u(rng), Vec3(u(rng), u(rng), u(rng)).normalized()).toRotationMatrix();
     const Vec3 shift = trial == 0 ? Vec3::Zero() : Vec3(u(rng), u(rng), u(rng));
     const Crossing x = make_crossing(r, r, 2 * r - eps, angle, rot, shift, 20 * r, 20);
     ContactDetector detector(x.model);
@@ -183,7 +195,7 @@ TEST(Detection, ParallelTouchingFibersGiveOneUniformContactLine) {
   c.fibers.push_back(polyline("a", {Vec3(0, 0, 0), Vec3(length, 0, 0)}, r, 20));
   c.fibers.push_back(polyline("b", {Vec3(0, 2 * r, 0), Vec3(length, 2 * r, 0)}, r, 20));
   const Model model = build_model(c);
-  ContactDetector detector(model);
+  ContactDetector detector(model, radius_spacing(model));  // contact elements every radius
   const VecX& q = model.reference;
   const Detection det = detector.detect(q);
   check_consistency(model, q, det);
@@ -224,7 +236,7 @@ TEST(Detection, ReusedDetectorFollowsTheMotion) {
   c.fibers.push_back(polyline("a", {Vec3(0, 0, 0), Vec3(0.01, 0, 0)}, r, 20));
   c.fibers.push_back(polyline("b", {Vec3(0, 5 * r, 0), Vec3(0.01, 5 * r, 0)}, r, 20));
   const Model model = build_model(c);
-  ContactDetector detector(model);
+  ContactDetector detector(model, radius_spacing(model));  // contact elements every radius
   VecX q = model.reference;
   Detection det;
   for (int pass = 0; pass < 3; ++pass) {
@@ -286,7 +298,8 @@ TEST(Detection, RadiiOneToTen) {
   // Thin fiber across a thick one (both orders of the fibers).
   for (int order = 0; order < 2; ++order) {
     const double r_i = order == 0 ? big : r, r_j = order == 0 ? r : big;
-    const Crossing x = make_crossing(r_i, r_j, big + r - 1e-3 * r, 0.5 * kPi, Mat3::Identity(), Vec3::Zero(), 40 * r, 20);
+    const Crossing x =
+        make_crossing(r_i, r_j, big + r - 1e-3 * r, 0.5 * kPi, Mat3::Identity(), Vec3::Zero(), 40 * r, 20);
     ContactDetector detector(x.model);
     const VecX& q = x.model.reference;
     const Detection det = detector.detect(q);
@@ -305,7 +318,7 @@ TEST(Detection, RadiiOneToTen) {
   c.fibers.push_back(polyline("thick", {Vec3(0, 0, 0), Vec3(length, 0, 0)}, big, 10));
   c.fibers.push_back(polyline("thin", {Vec3(0, big + r, 0), Vec3(length, big + r, 0)}, r, 40));
   const Model model = build_model(c);
-  ContactDetector detector(model);
+  ContactDetector detector(model, radius_spacing(model));  // contact elements every radius
   const Detection det = detector.detect(model.reference);
   check_consistency(model, model.reference, det);
   ASSERT_EQ(det.zones.size(), 1u);
@@ -342,7 +355,7 @@ TEST(Detection, NearlyParallelAndTangentFibers) {
     c.fibers.push_back(polyline("a", {Vec3(0, 0, 0), Vec3(50 * r, 0, 0)}, r, 10));
     c.fibers.push_back(polyline("b", {Vec3(0, 0, 2.49 * r), Vec3(50 * r, 0, 2.49 * r)}, r, 10));
     const Model model = build_model(c);
-    ContactDetector detector(model);
+    ContactDetector detector(model, radius_spacing(model));  // contact elements every radius
     const Detection det = detector.detect(model.reference);
     check_consistency(model, model.reference, det);
     ASSERT_EQ(det.zones.size(), 1u);
@@ -352,17 +365,13 @@ TEST(Detection, NearlyParallelAndTangentFibers) {
   {
     Case c = base_case();
     c.fibers.push_back(polyline("line", {Vec3(-30 * r, 0, 0), Vec3(30 * r, 0, 0)}, r, 30));
-    FiberSpec arc;
-    arc.name = "arc";
-    arc.material = "m";
-    arc.radius = r;
+    FiberSpec arc = fiber("arc", r, 80);
     arc.path.kind = PathSpec::Kind::Arc;
     arc.path.center = Vec3(0, 0, 52 * r);
     arc.path.axis = Vec3::UnitY();
     arc.path.radius = 50 * r;
     arc.path.start_angle = 0;
     arc.path.angle = kPi;
-    arc.elements = 80;
     c.fibers.push_back(arc);
     const Model model = build_model(c);
     ContactDetector detector(model);
@@ -433,10 +442,10 @@ TEST(Detection, SelfContactOfACoilButNotOfNeighbouringElements) {
   {
     const double d = 2 * r - 1e-3 * r;
     Case c = base_case();
-    c.fibers.push_back(polyline("loop",
-                                {Vec3(0, 0, 0), Vec3(20 * r, 0, 0), Vec3(20 * r, 10 * r, 0), Vec3(10 * r, 10 * r, d),
-                                 Vec3(10 * r, -10 * r, d)},
-                                r, 70));
+    c.fibers.push_back(polyline(
+        "loop",
+        {Vec3(0, 0, 0), Vec3(20 * r, 0, 0), Vec3(20 * r, 10 * r, 0), Vec3(10 * r, 10 * r, d), Vec3(10 * r, -10 * r, d)},
+        r, 70));
     const Model model = build_model(c);
     ContactDetector detector(model);
     const VecX& q = model.reference;
@@ -472,11 +481,11 @@ Model random_cloud(unsigned seed, double box) {
     const Vec3 a(box * u(rng), box * u(rng), box * u(rng));
     const Vec3 dir = Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized();
     const Vec3 bend = 0.2 * len * Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
-    c.fibers.push_back(polyline("f" + std::to_string(k), {a, a + 0.5 * len * dir + bend, a + len * dir}, r,
+    c.fibers.push_back(polyline(std::to_string(k), {a, a + 0.5 * len * dir + bend, a + len * dir}, r,
                                 2 + static_cast<int>(3 * u(rng))));
   }
   for (int k = 0; k < 5; ++k) {
-    FiberSpec h = helix("h" + std::to_string(k), 3e-4, 1.5e-4, 2, 5e-5, 30);
+    FiberSpec h = helix(std::to_string(1000 + k), 3e-4, 1.5e-4, 2, 5e-5, 30);
     h.path.center = Vec3(box * u(rng), box * u(rng), box * u(rng));
     c.fibers.push_back(h);
   }

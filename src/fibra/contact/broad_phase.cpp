@@ -86,21 +86,31 @@ const std::vector<ElementPair>& BroadPhase::find_pairs(const VecX& q) {
   m_pairs.clear();
   if (n == 0) return m_pairs;
 
-  // 1. Curves and boxes; mean of the largest box extent and the scene's lower corner.
-  double extent_sum = 0;
-  double lo_x = 1e300, lo_y = 1e300, lo_z = 1e300;
-#pragma omp parallel for schedule(static) reduction(+ : extent_sum) reduction(min : lo_x, lo_y, lo_z)
+  // 1. Curves and boxes; mean box extent along each axis and the scene's bounds.
+  double ext_x = 0, ext_y = 0, ext_z = 0;
+  double lo_x = 1e300, lo_y = 1e300, lo_z = 1e300, hi_x = -1e300, hi_y = -1e300, hi_z = -1e300;
+#pragma omp parallel for schedule(static) reduction(+ : ext_x, ext_y, ext_z) \
+    reduction(min : lo_x, lo_y, lo_z) reduction(max : hi_x, hi_y, hi_z)
   for (Index e = 0; e < n; ++e) {
     m_curves[e] = centroid_curve(q.data() + m_model.elements[e].first_dof);
-    m_boxes[e] = element_box(m_curves[e], m_info[e].inflation);
-    extent_sum += (m_boxes[e].hi - m_boxes[e].lo).maxCoeff();
-    lo_x = std::min(lo_x, m_boxes[e].lo.x());
-    lo_y = std::min(lo_y, m_boxes[e].lo.y());
-    lo_z = std::min(lo_z, m_boxes[e].lo.z());
+    const Box& box = m_boxes[e] = element_box(m_curves[e], m_info[e].inflation);
+    ext_x += box.hi.x() - box.lo.x();
+    ext_y += box.hi.y() - box.lo.y();
+    ext_z += box.hi.z() - box.lo.z();
+    lo_x = std::min(lo_x, box.lo.x());
+    lo_y = std::min(lo_y, box.lo.y());
+    lo_z = std::min(lo_z, box.lo.z());
+    hi_x = std::max(hi_x, box.hi.x());
+    hi_y = std::max(hi_y, box.hi.y());
+    hi_z = std::max(hi_z, box.hi.z());
   }
+  // Cells as large as the mean box along each axis (each box covers about 2 x 2 x 2 cells
+  // whatever the boxes' common orientation), and at most 2^20 per axis across the scene.
   m_origin = Vec3(lo_x, lo_y, lo_z);
-  m_cell = std::max(extent_sum / static_cast<double>(n), 1e-300);
-  const double inv_cell = 1.0 / m_cell;
+  const Vec3 scene(hi_x - lo_x, hi_y - lo_y, hi_z - lo_z);
+  const Vec3 mean = Vec3(ext_x, ext_y, ext_z) / static_cast<double>(n);
+  for (int d = 0; d < 3; ++d) m_cell[d] = std::max({mean[d], scene[d] / 1048576.0, 1e-300});
+  const Vec3 inv_cell = m_cell.cwiseInverse();
 
   // 2. Cell ranges of every box; entry slots by prefix sum.
   m_entry_begin[0] = 0;
@@ -108,8 +118,8 @@ const std::vector<ElementPair>& BroadPhase::find_pairs(const VecX& q) {
     int* r = &m_cell_range[6 * e];
     Index count = 1;
     for (int d = 0; d < 3; ++d) {
-      r[d] = cell_coord(m_boxes[e].lo[d], m_origin[d], inv_cell);
-      r[3 + d] = cell_coord(m_boxes[e].hi[d], m_origin[d], inv_cell);
+      r[d] = cell_coord(m_boxes[e].lo[d], m_origin[d], inv_cell[d]);
+      r[3 + d] = cell_coord(m_boxes[e].hi[d], m_origin[d], inv_cell[d]);
       count *= r[3 + d] - r[d] + 1;
     }
     m_entry_begin[e + 1] = m_entry_begin[e] + count;
@@ -163,9 +173,9 @@ const std::vector<ElementPair>& BroadPhase::find_pairs(const VecX& q) {
           const Box& box_b = m_boxes[b];
           if (!box_a.overlaps(box_b)) continue;
           const Vec3 corner = box_a.lo.cwiseMax(box_b.lo);
-          if (cell_coord(corner.x(), m_origin.x(), inv_cell) != i ||
-              cell_coord(corner.y(), m_origin.y(), inv_cell) != j ||
-              cell_coord(corner.z(), m_origin.z(), inv_cell) != k)
+          if (cell_coord(corner.x(), m_origin.x(), inv_cell.x()) != i ||
+              cell_coord(corner.y(), m_origin.y(), inv_cell.y()) != j ||
+              cell_coord(corner.z(), m_origin.z(), inv_cell.z()) != k)
             continue;
           if (excluded(a, b)) continue;
           out.push_back({a, b});

@@ -1,8 +1,9 @@
 #pragma once
 /// Broad phase of contact detection (METHOD §2.1): axis-aligned boxes of the beam elements'
 /// centroid curves, inflated by the section radius plus a margin, and the element pairs whose
-/// boxes overlap, found with a uniform grid stored as a spatial hash (cost linear in the
-/// number of elements for bounded box sizes). Choices: docs/theory/contact.md, "Detection".
+/// boxes overlap, found with a uniform grid (cells the mean box size along each axis) stored
+/// as a spatial hash: cost linear in the number of elements for boxes of similar sizes. Choices:
+/// docs/theory/contact.md, "Detection".
 #include <vector>
 
 #include "fibra/core/types.hpp"
@@ -16,16 +17,16 @@ struct Box {
   Vec3 hi = Vec3::Zero();  ///< maximum corner [m]
   /// True when the closed boxes intersect.
   bool overlaps(const Box& o) const {
-    return lo.x() <= o.hi.x() && o.lo.x() <= hi.x() && lo.y() <= o.hi.y() && o.lo.y() <= hi.y() &&
-           lo.z() <= o.hi.z() && o.lo.z() <= hi.z();
+    return lo.x() <= o.hi.x() && o.lo.x() <= hi.x() && lo.y() <= o.hi.y() && o.lo.y() <= hi.y() && lo.z() <= o.hi.z() &&
+           o.lo.z() <= hi.z();
   }
 };
 
 /// The quadratic centroid curve of an element in power form: x0(eta) = c + b eta + a eta^2.
 struct CentroidCurve {
-  Vec3 a;  ///< (x0_0 - 2 x0_1 + x0_2) / 2 [m]
-  Vec3 b;  ///< (x0_2 - x0_0) / 2 [m]
-  Vec3 c;  ///< x0_1 [m]
+  Vec3 a;                                                           ///< (x0_0 - 2 x0_1 + x0_2) / 2 [m]
+  Vec3 b;                                                           ///< (x0_2 - x0_0) / 2 [m]
+  Vec3 c;                                                           ///< x0_1 [m]
   Vec3 value(double eta) const { return c + eta * (b + eta * a); }  ///< x0(eta) [m]
   Vec3 derivative(double eta) const { return b + 2.0 * eta * a; }   ///< dx0/deta [m]
 };
@@ -52,11 +53,11 @@ struct BroadPhaseParams {
 
 /// Per-element data of the contact search (reference quantities).
 struct ContactBeamInfo {
-  int fiber = 0;          ///< owning fiber
-  Index local = 0;        ///< index of the element within its fiber
-  double radius = 0;      ///< section radius max(a, b) [m]
-  double inflation = 0;   ///< box inflation: radius + margin [m]
-  double length = 0;      ///< reference arc length of the element [m]
+  int fiber = 0;         ///< owning fiber
+  Index local = 0;       ///< index of the element within its fiber
+  double radius = 0;     ///< section radius max(a, b) [m]
+  double inflation = 0;  ///< box inflation: radius + margin [m]
+  double length = 0;     ///< reference arc length of the element [m]
 };
 
 /// Boxes and candidate pairs, with buffers reused across calls (no allocation once they
@@ -76,7 +77,7 @@ class BroadPhase {
   const std::vector<CentroidCurve>& curves() const { return m_curves; }       ///< last centroid curves
   const ContactBeamInfo& info(Index e) const { return m_info[e]; }            ///< data of element e
   double self_exclusion(int fiber) const { return m_self_exclusion[fiber]; }  ///< exclusion length of a fiber [m]
-  double cell_size() const { return m_cell; }                                 ///< last grid cell size [m]
+  const Vec3& cell_size() const { return m_cell; }                            ///< last grid cell sizes [m]
   /// True when elements a and b are on the same fiber with reference arc-length separation
   /// (between the nearest ends of their intervals) below the fiber's self-exclusion length.
   bool excluded(Index a, Index b) const;
@@ -91,13 +92,13 @@ class BroadPhase {
   std::vector<double> m_self_exclusion;
   std::vector<CentroidCurve> m_curves;
   std::vector<Box> m_boxes;
-  std::vector<int> m_cell_range;   // 6 per element: lo xyz, hi xyz
+  std::vector<int> m_cell_range;     // 6 per element: lo xyz, hi xyz
   std::vector<Index> m_entry_begin;  // per element: first entry slot (prefix of cell counts)
   std::vector<Index> m_bucket_begin;
   std::vector<Entry> m_entries;
   std::vector<std::vector<ElementPair>> m_thread_pairs;
   std::vector<ElementPair> m_pairs;
-  double m_cell = 0;
+  Vec3 m_cell = Vec3::Ones();
   Vec3 m_origin = Vec3::Zero();
   std::uint64_t m_bucket_mask = 0;
 };

@@ -110,15 +110,20 @@ std::vector<ContactElement> ContactManager::detect(const VecX& q, const VecX& q_
 }
 
 double ContactManager::update_normals(std::vector<ContactElement>& contacts, const VecX& q) const {
+  // New normals between section centres; they replace the old ones only if one turned by the
+  // tolerance or more: below it the converged state stays consistent with the normals it was
+  // solved with (forces and reactions balance exactly).
   double turn = 0.0;
-  for (ContactElement& c : contacts) {
+  std::vector<Vec3> fresh(contacts.size());
+  for (size_t k = 0; k < contacts.size(); ++k) {
+    const ContactElement& c = contacts[k];
     const Vec3 d = section_centre(m_model, c.b, q) - section_centre(m_model, c.a, q);
     const double len = d.norm();
-    if (len <= 0.0) continue;
-    const Vec3 n = d / len;
-    turn = std::max(turn, std::acos(std::clamp(n.dot(c.normal), -1.0, 1.0)));
-    c.normal = n;
+    fresh[k] = len > 0.0 ? Vec3(d / len) : c.normal;
+    turn = std::max(turn, std::acos(std::clamp(fresh[k].dot(c.normal), -1.0, 1.0)));
   }
+  if (turn >= m_spec.normal_tolerance)
+    for (size_t k = 0; k < contacts.size(); ++k) contacts[k].normal = fresh[k];
   return turn;
 }
 

@@ -37,8 +37,8 @@ class ContactManager {
   /// the matching previous element (or the initial one), friction history carried over from
   /// `previous` (matched by fiber pair and arc length), separations measured at `q_start`.
   std::vector<ContactElement> detect(const VecX& q, const VecX& q_start, const std::vector<ContactElement>& previous);
-  /// Sets each normal to the unit vector between its section centres at q; returns the largest
-  /// turn [rad].
+  /// Computes each normal as the unit vector between its section centres at q and, if any
+  /// turned by the normal tolerance or more, sets them all; returns the largest turn [rad].
   double update_normals(std::vector<ContactElement>& contacts, const VecX& q) const;
   /// Raises the penalty of every zone whose largest penetration exceeds the allowed one; returns
   /// the number of zones raised.

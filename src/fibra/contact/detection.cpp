@@ -26,10 +26,10 @@ struct Node {
 
 // A point of the intermediate geometry of a zone.
 struct ZonePoint {
-  Vec3 m;       // midpoint of the matched centroids
-  Vec3 tau;     // bisector of the two tangents
-  double s;     // arc length along the polyline of midpoints
-  double d;     // distance between the matched centroids
+  Vec3 m;    // midpoint of the matched centroids
+  Vec3 tau;  // bisector of the two tangents
+  double s;  // arc length along the polyline of midpoints
+  double d;  // distance between the matched centroids
   double u_i, u_j;
 };
 
@@ -117,8 +117,8 @@ Vec3 tangent_at(const std::vector<CentroidCurve>& curves, Index first, Index cou
 // Intersection of the plane through x_g normal to tau with a fiber's centroid line: Newton
 // on (x0(u) - x_g) . tau = 0 from u, moving across elements; false when the root lies beyond
 // an end of the fiber or Newton fails.
-bool plane_cut(const std::vector<CentroidCurve>& curves, Index first, Index count, const Vec3& x_g,
-               const Vec3& tau, double tolerance, double& u) {
+bool plane_cut(const std::vector<CentroidCurve>& curves, Index first, Index count, const Vec3& x_g, const Vec3& tau,
+               double tolerance, double& u) {
   const double u_max = 2.0 * static_cast<double>(count);
   u = std::clamp(u, 0.0, u_max);
   for (int it = 0; it < 40; ++it) {
@@ -166,8 +166,7 @@ void section_at(const double* q_e, double eta, Vec3& x0, Vec3& g1, Vec3& g2) {
 
 // Section coordinates of the border point of the ellipse (semi-axes a, b) in the direction
 // of `toward` projected on the section plane (least squares on [g1 g2]).
-void border_point(const Vec3& g1, const Vec3& g2, const Vec3& toward, double a, double b, double& xi1,
-                  double& xi2) {
+void border_point(const Vec3& g1, const Vec3& g2, const Vec3& toward, double a, double b, double& xi1, double& xi2) {
   const double g11 = g1.squaredNorm(), g22 = g2.squaredNorm(), g12 = g1.dot(g2);
   const double r1 = g1.dot(toward), r2 = g2.dot(toward);
   const double det = g11 * g22 - g12 * g12;
@@ -276,13 +275,16 @@ void ContactDetector::detect_fiber(int fiber, const VecX& q, Workspace& work, Fi
     ctx.r_min = std::min(ctx.r_i, ctx.r_j);
     ctx.margin = m_params.margin > 0 ? m_params.margin : 0.5 * ctx.r_min;
     ctx.threshold = ctx.r_i + ctx.r_j + ctx.margin;
-    ctx.spacing = m_params.spacing > 0 ? m_params.spacing : ctx.r_min;
     ctx.first_i = fib_i.first_element;
     ctx.count_i = fib_i.num_elements;
     ctx.first_j = fib_j.first_element;
     ctx.count_j = fib_j.num_elements;
     ctx.length_i = fib_i.length / static_cast<double>(fib_i.num_elements);
     ctx.length_j = fib_j.length / static_cast<double>(fib_j.num_elements);
+    // Default spacing: the smaller radius, but no closer than half the shorter element (two
+    // contact elements per beam element resolve a contact line as well as the beam can).
+    ctx.spacing = m_params.spacing > 0 ? m_params.spacing
+                                       : std::max(ctx.r_min, 0.5 * std::min(ctx.length_i, ctx.length_j));
     ctx.exclusion = m_broad.self_exclusion(fiber);
     // Samples: at most the smaller radius and half an element apart, and at most half the
     // shortest zone of a touching crossing, 2 sqrt(2 (r_i + r_j) m + m^2), so none is missed.
@@ -337,9 +339,20 @@ void ContactDetector::detect_fiber(int fiber, const VecX& q, Workspace& work, Fi
           const double u_j = 2.0 * static_cast<double>(local_j) + pr.eta + 1.0;
           const double s_j = 0.5 * u_j * ctx.length_j;
           if (ctx.self && s_j - s_i < ctx.exclusion) continue;
+          // One match per place on fiber j: the elements on both sides of a node (a slope kink,
+          // the elements being only C0) can each have an interior closest point a hair apart.
           bool duplicate = false;
-          for (Index m = cur_begin; m < static_cast<Index>(work.nodes.size()); ++m)
-            duplicate = duplicate || std::abs(work.nodes[m].u_j - u_j) < 1e-9;
+          for (Index m = cur_begin; m < static_cast<Index>(work.nodes.size()); ++m) {
+            Node& other = work.nodes[m];
+            if (std::abs(other.s_j - s_j) >= 0.25 * ctx.sample) continue;
+            duplicate = true;
+            if (dist < (other.x_j - p).norm()) {  // keep the closer of the two
+              other.s_j = s_j;
+              other.u_j = u_j;
+              other.x_j = x_j;
+              other.t_j = cj.derivative(pr.eta).normalized();
+            }
+          }
           if (duplicate) continue;
           Node node;
           node.s_i = s_i;
@@ -432,7 +445,8 @@ void ContactDetector::detect_fiber(int fiber, const VecX& q, Workspace& work, Fi
         const double lo = 0.0, hi = length;
         const int l_min = static_cast<int>(std::ceil((lo - anchor) / ctx.spacing));
         const int l_max = static_cast<int>(std::floor((hi - anchor) / ctx.spacing));
-        for (int l = std::min(l_min, 0); l <= std::max(l_max, 0); ++l) work.positions.push_back(anchor + l * ctx.spacing);
+        for (int l = std::min(l_min, 0); l <= std::max(l_max, 0); ++l)
+          work.positions.push_back(anchor + l * ctx.spacing);
       } else {
         for (int l = 0; l < n_regular; ++l) work.positions.push_back(-0.5 * step + (l + 0.5) * extended / n_regular);
       }

@@ -13,27 +13,30 @@ namespace fibra {
 
 /// Detection settings; a zero selects the default, which depends on the pair's radii.
 struct DetectionParams {
-  double margin = 0;          ///< extra distance beyond r_i + r_j for proximity [m]; 0 -> 0.5 * min radius of the pair
-  double spacing = 0;         ///< spacing of contact elements along the intermediate geometry [m]; 0 -> the smaller radius of the pair
-  double self_exclusion = 0;  ///< same-fiber arc-length exclusion [m]; 0 -> 4 (r_i + r_j) = 8 r
+  /// Extra distance beyond r_i + r_j for proximity [m]; 0 -> half the smaller radius of the pair.
+  double margin = 0;
+  /// Spacing of contact elements along the intermediate geometry [m]; 0 -> the smaller radius of the pair.
+  double spacing = 0;
+  /// Same-fiber arc-length exclusion [m]; 0 -> 4 (r_i + r_j) = 8 r.
+  double self_exclusion = 0;
 };
 
 /// A proximity zone: a part of fiber i close to a part of fiber j (i <= j; i == j: self-contact).
 struct ProximityZone {
-  int fiber_i = 0;          ///< sampled fiber (the lower index)
-  int fiber_j = 0;          ///< other fiber
-  double s_begin = 0;       ///< start of the zone on fiber i, reference arc length [m]
-  double s_end = 0;         ///< end of the zone on fiber i, reference arc length [m]
-  int first_element = 0;    ///< index of its first contact element in Detection::elements
-  int num_elements = 0;     ///< number of its contact elements (>= 1)
+  int fiber_i = 0;        ///< sampled fiber (the lower index)
+  int fiber_j = 0;        ///< other fiber
+  double s_begin = 0;     ///< start of the zone on fiber i, reference arc length [m]
+  double s_end = 0;       ///< end of the zone on fiber i, reference arc length [m]
+  int first_element = 0;  ///< index of its first contact element in Detection::elements
+  int num_elements = 0;   ///< number of its contact elements (>= 1)
 };
 
 /// Result of one detection: zones sorted by (fiber_i, fiber_j, s_begin), their contact
 /// elements contiguous and in the same order (along the intermediate geometry).
 struct Detection {
-  std::vector<ProximityZone> zones;     ///< proximity zones
-  std::vector<ContactElement> elements; ///< contact elements (law and friction left default)
-  double time = 0;                      ///< wall time of the detection [s]
+  std::vector<ProximityZone> zones;      ///< proximity zones
+  std::vector<ContactElement> elements;  ///< contact elements (law and friction left default)
+  double time = 0;                       ///< wall time of the detection [s]
 };
 
 /// Detects proximity zones and builds contact elements at given dofs; keeps its buffers
@@ -42,7 +45,7 @@ class ContactDetector {
  public:
   /// Prepares the detector for `model`.
   explicit ContactDetector(const Model& model, DetectionParams params = {});
-  ~ContactDetector();  ///< out of line (private workspace type)
+  ~ContactDetector();                                           ///< out of line (private workspace type)
   ContactDetector(const ContactDetector&) = delete;             ///< not copyable
   ContactDetector& operator=(const ContactDetector&) = delete;  ///< not copyable
 
@@ -51,12 +54,11 @@ class ContactDetector {
   /// Detection at dofs q into `out`, reusing its capacity.
   void detect(const VecX& q, Detection& out);
 
-  const BroadPhase& broad_phase() const { return m_broad; }  ///< the broad phase (last boxes and pairs)
+  const BroadPhase& broad_phase() const { return m_broad; }   ///< the broad phase (last boxes and pairs)
   const DetectionParams& params() const { return m_params; }  ///< settings
 
-  struct Workspace;  ///< per-thread scratch buffers (defined in detection.cpp)
-
  private:
+  struct Workspace;  // per-thread scratch buffers (defined in detection.cpp)
   struct FiberOutput {
     std::vector<ProximityZone> zones;
     std::vector<ContactElement> elements;
