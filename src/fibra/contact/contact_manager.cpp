@@ -168,6 +168,16 @@ bool ContactManager::passed_through(const std::vector<ContactElement>& contacts,
   return false;
 }
 
+double ContactManager::penetration_ratio(const std::vector<ContactElement>& contacts, const VecX& q) const {
+  double worst = 0.0;
+  for (const ContactElement& c : contacts) {
+    const Vec3 d = particle_position(c.b, q.data() + m_model.elements[c.b.element].first_dof) -
+                   particle_position(c.a, q.data() + m_model.elements[c.a.element].first_dof);
+    worst = std::max(worst, -d.dot(c.normal) / (m_spec.max_penetration * pair_radius(c)));
+  }
+  return worst;
+}
+
 ContactStats ContactManager::stats(const std::vector<ContactElement>& contacts,
                                    const std::vector<ContactResponse>& responses) const {
   ContactStats s;

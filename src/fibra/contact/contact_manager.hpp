@@ -49,6 +49,9 @@ class ContactManager {
   /// True if a contact element without history penetrates deeper than a fiber can within one
   /// increment (a crossing missed between detections).
   bool passed_through(const std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses) const;
+  /// Largest penetration of `contacts` at q (gaps along their own normals), divided by the
+  /// allowed penetration of each pair.
+  double penetration_ratio(const std::vector<ContactElement>& contacts, const VecX& q) const;
   /// Statistics of contacts at their responses.
   ContactStats stats(const std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses) const;
   /// Friction parameters.

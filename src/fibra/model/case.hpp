@@ -121,7 +121,7 @@ struct ContactSpec {
   double spacing = 0;             ///< contact element spacing [m]; 0 = the smaller radius of a pair
   double self_exclusion = 0;      ///< same-fiber arc length without self-contact [m]; 0 = default
   int max_detections = 8;         ///< detection loops per increment
-  int max_normal_updates = 12;    ///< normal-update loops per detection
+  int max_normal_updates = 30;    ///< normal-update loops per detection
   double normal_tolerance = 1e-3; ///< normals converged when they turn less than this [rad]
 };
 

@@ -39,7 +39,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     std::vector<ContactPoint> points;
     if (vtu && solver.has_contact()) {
       const auto& contacts = solver.problem().contacts();
-      const std::vector<ContactResponse> responses = solver.problem().contact_responses(q);
+      const std::vector<ContactResponse>& responses = info.contact_responses;
       points.reserve(contacts.size());
       for (size_t k = 0; k < contacts.size(); ++k) {
         const ContactElement& ce = contacts[k];

@@ -153,10 +153,16 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     const std::vector<ContactResponse> responses = m_problem->contact_responses(m_q);
     const int raised = m_contact->adapt_penalty(m_problem->contacts(), responses);
     m_contact_stats.penalty_raises += raised;
-    // Detect again at the converged state: done when nothing new appears.
+    // Detect again at the converged state: done when nothing new appears and the fresh
+    // elements (particles facing each other at this state) see no penetration beyond the cap;
+    // otherwise the loops go on with the fresh elements.
     contacts = detect();
-    bool same = contacts.size() == m_problem->contacts().size();
-    for (size_t k = 0; same && k < contacts.size(); ++k) same = !contacts[k].fresh;
+    // Consistent: no new element would carry force (the new ones do not penetrate) and the
+    // fresh set sees no penetration beyond the cap.
+    bool same = true;
+    for (size_t k = 0; same && k < contacts.size(); ++k)
+      if (contacts[k].fresh) same = m_contact->penetration_ratio({contacts[k]}, m_q) <= 0.0;
+    same = same && m_contact->penetration_ratio(contacts, m_q) <= 1.0;
     if (same && raised == 0) {
       const std::vector<ContactResponse> final_responses = m_problem->contact_responses(m_q);
       const ContactStats st = m_contact->stats(m_problem->contacts(), final_responses);
@@ -173,7 +179,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     }
     // New elements: refuse those that start deep inside another fiber (a crossing missed
     // between two detections); the increment is cut.
-    m_problem->set_contacts(contacts, m_contact->friction());
+    if (m_problem->set_contacts(contacts, m_contact->friction())) m_linear->analyze(m_problem->pattern());
     const std::vector<ContactResponse> fresh_responses = m_problem->contact_responses(m_q);
     if (m_contact->passed_through(m_problem->contacts(), fresh_responses)) return false;
     contacts = m_problem->contacts();
@@ -397,7 +403,8 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       info.step_end = lambda >= 1.0;
       info.reactions = reactions(m_gradient);
       if (m_contact) {
-        m_contact->commit(m_problem->contacts(), m_problem->contact_responses(m_q), m_q);
+        info.contact_responses = m_problem->contact_responses(m_q);
+        m_contact->commit(m_problem->contacts(), info.contact_responses, m_q);
         info.contact = m_contact_stats;
       }
       m_stats.time_assembly = m_problem->times().assembly;

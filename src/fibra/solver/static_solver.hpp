@@ -29,6 +29,7 @@ struct IncrementInfo {
   bool step_end = false;       ///< last increment of its step
   std::vector<double> reactions;  ///< per reaction column (see reaction_columns())
   ContactStats contact;           ///< contact statistics (zero without contact)
+  std::vector<ContactResponse> contact_responses;  ///< per contact element, before the history commit
 };
 
 /// Counters and timings of a run.
