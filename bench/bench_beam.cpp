@@ -28,7 +28,7 @@ struct BeamSetup {
     s.elements = 16;
     c.fibers.push_back(s);
     model = build_model(c);
-    q = bench::deformed_state(model, 1e-2);
+    q = bench::deformed_state(model, {.bending = 1e-2, .stretch = 2e-3, .twist = 1e-2});
   }
 };
 

@@ -2,7 +2,10 @@
 /// Shared set-up of the benchmarks: a bundle of straight parallel fibers on a hexagonal grid
 /// (built as a Case, meshed by build_model) and a smooth deformed state near the reference.
 #include <Eigen/Geometry>
+#include <omp.h>
+
 #include <algorithm>
+#include <memory>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -77,20 +80,30 @@ inline Case bundle_case(int fibers, int elements, double radius = 1e-5, double l
   return c;
 }
 
-/// A smooth deformation of the reference state, fiber by fiber: centroid displacement u(X) of
-/// relative amplitude `amplitude` (bending in two planes, axial stretch about amplitude/2);
-/// section vectors rotated with the tangent (no shear), twisted about it and contracted by
-/// Poisson's ratio 0.22 times the axial strain. The displacement field depends on the fiber's
-/// position, so no two fibers of a bundle are identical.
-inline VecX deformed_state(const Model& model, double amplitude = 1e-3) {
+/// Amplitudes of the smooth deformation applied by deformed_state().
+struct Deformation {
+  double bending = 1e-3;  ///< lateral deflection / fiber length (two planes)
+  double stretch = 1e-3;  ///< mean axial strain
+  double twist = 1e-3;    ///< twist angle amplitude [rad]
+};
+
+/// A smooth deformation of the reference state, fiber by fiber: the centroid is displaced by
+/// u(X) (bending in two planes, axial stretch with a smooth variation), the section vectors
+/// are rotated with the tangent (no shear strain) and twisted about it, keeping their length.
+/// The displacement field depends on the fiber's position, so no two fibers of a bundle are
+/// identical. The defaults keep the tangent stiffness positive definite with the first node
+/// of every fiber clamped: the section vectors keep their length under axial stretch, so the
+/// section carries a small transverse tension; without it the in-section rotation (twist)
+/// mode, resisted only by torsion, turns indefinite under the transverse stresses of bending.
+inline VecX deformed_state(const Model& model, const Deformation& a = {}) {
   const double pi = std::numbers::pi;
   double len = model.length_scale;
   for (const Fiber& f : model.fibers) len = std::min(len, f.length);
   auto u = [&](const Vec3& x) -> Vec3 {
     const double s = x.z() / len;
-    return Vec3(amplitude * len * std::sin(pi * s) * (1.0 + 0.2 * std::sin(50.0 * x.x() / len)),
-                0.5 * amplitude * len * std::sin(2.0 * pi * s + 100.0 * x.y() / len),
-                0.5 * amplitude * x.z() + 0.1 * amplitude * len * std::sin(3.0 * pi * s));
+    return Vec3(a.bending * len * std::sin(pi * s) * (1.0 + 0.2 * std::sin(50.0 * x.x() / len)),
+                0.5 * a.bending * len * std::sin(2.0 * pi * s + 100.0 * x.y() / len),
+                a.stretch * x.z() + 0.1 * a.stretch * len * std::sin(3.0 * pi * s) / (3.0 * pi));
   };
   VecX q = model.reference;
   for (Index k = 0; k < model.num_nodes(); ++k) {
@@ -101,13 +114,11 @@ inline VecX deformed_state(const Model& model, double amplitude = 1e-3) {
     // Deformed tangent: derivative of x + u(x) along the reference tangent.
     const double h = 1e-6 * len;
     const Vec3 t = t0 + (u(x + h * t0) - u(x - h * t0)) / (2.0 * h);
-    const double stretch = t.norm();
     const Eigen::Quaterniond bend = Eigen::Quaterniond::FromTwoVectors(t0, t);
-    const Eigen::AngleAxisd twist(2.0 * amplitude * std::sin(pi * x.z() / len), t / stretch);
-    const double contraction = 1.0 - 0.22 * (stretch - 1.0);
+    const Eigen::AngleAxisd twist(a.twist * std::sin(pi * x.z() / len), t.normalized());
     q.segment<3>(9 * k) = x + u(x);
-    q.segment<3>(9 * k + 3) = contraction * (twist * (bend * g1));
-    q.segment<3>(9 * k + 6) = contraction * (twist * (bend * g2));
+    q.segment<3>(9 * k + 3) = twist * (bend * g1);
+    q.segment<3>(9 * k + 6) = twist * (bend * g2);
   }
   return q;
 }
@@ -125,5 +136,28 @@ inline void hold_fixed(const Model& model, const Problem& problem, VecX& q) {
   for (Index d = 0; d < q.size(); ++d)
     if (problem.fixed()[d]) q[d] = model.reference[d];
 }
+
+/// A bundle of straight fibers (bundle_case) meshed, its Problem with the first node of every
+/// fiber clamped, the deformed state (deformed_state) and the gradient and Hessian there.
+struct Bundle {
+  Case spec;
+  Model model;
+  std::unique_ptr<Problem> problem;
+  VecX q;                       ///< deformed state
+  VecX gradient;                ///< gradient of the potential at q
+  VecX residual;                ///< gradient with fixed dofs zeroed (Newton right-hand side, negated)
+  std::vector<double> hessian;  ///< upper CSC values at q
+
+  Bundle(int fibers, int elements) : spec(bundle_case(fibers, elements)), model(build_model(spec)) {
+    problem = std::make_unique<Problem>(model);
+    fix_first_nodes(model, *problem);
+    q = deformed_state(model);
+    hold_fixed(model, *problem, q);
+    problem->evaluate(q, &gradient, &hessian);
+    residual = gradient;
+    for (Index d = 0; d < residual.size(); ++d)
+      if (problem->fixed()[d]) residual[d] = 0.0;
+  }
+};
 
 }  // namespace fibra::bench

@@ -8,7 +8,7 @@
 //   BM_CholmodAnalyze             symbolic analysis (METIS ordering, supernodes), once
 //   BM_CholmodFactorize/blas_threads:B  numeric supernodal LL^T with B OpenBLAS threads
 //   BM_CholmodSolve               forward/back substitution for one right-hand side
-//   BM_NewtonIteration/threads:2  assembly + factorization + solve (target < 1 s)
+//   BM_NewtonIteration/threads:2/blas_threads:B  assembly + factorization + solve (target < 1 s)
 //   BM_EigenFactorize/fibers:F    Eigen SimplicialLDLT numeric factorization (fallback)
 //   BM_EigenSolve/fibers:F        Eigen solve
 //
@@ -19,6 +19,7 @@
 
 #include <map>
 #include <memory>
+#include <string>
 
 #include "bench_common.hpp"
 #include "fibra/solver/linear_solver.hpp"
@@ -30,31 +31,12 @@ using namespace fibra;
 constexpr int kFibers = 480;
 constexpr int kElements = 100;
 
-/// A bundle with its problem, deformed state, gradient and Hessian at that state.
-struct Bundle {
-  Case spec;
-  Model model;
-  std::unique_ptr<Problem> problem;
-  VecX q, gradient, residual;
-  std::vector<double> hessian;
-
-  explicit Bundle(int fibers) : spec(bench::bundle_case(fibers, kElements)), model(build_model(spec)) {
-    problem = std::make_unique<Problem>(model);
-    bench::fix_first_nodes(model, *problem);
-    q = bench::deformed_state(model, 1e-3);
-    bench::hold_fixed(model, *problem, q);
-    omp_set_num_threads(2);
-    problem->evaluate(q, &gradient, &hessian);
-    residual = gradient;
-    for (Index d = 0; d < residual.size(); ++d)
-      if (problem->fixed()[d]) residual[d] = 0.0;
-  }
-};
+using bench::Bundle;
 
 Bundle& bundle(int fibers = kFibers) {
   static std::map<int, std::unique_ptr<Bundle>> cache;
   auto& b = cache[fibers];
-  if (!b) b = std::make_unique<Bundle>(fibers);
+  if (!b) b = std::make_unique<Bundle>(fibers, kElements);
   return *b;
 }
 
@@ -64,7 +46,10 @@ LinearSolver& analysed(const std::string& kind, int fibers = kFibers) {
   auto& s = cache[{kind, fibers}];
   if (!s) {
     s = make_linear_solver(kind);
-    s->analyze(bundle(fibers).problem->pattern());
+    Bundle& b = bundle(fibers);
+    s->analyze(b.problem->pattern());
+    // Warm-up: the first factorization allocates the numeric factor (page faults on ~150 MB).
+    s->factorize(b.hessian, 0.0);
   }
   return *s;
 }
@@ -79,17 +64,56 @@ void add_size_counters(benchmark::State& state, const Bundle& b) {
 // which on Debian is the OpenBLAS pthread build; no link dependency needed here).
 using SetThreads = void (*)(int);
 using GetThreads = int (*)();
+using GetString = char* (*)();
+/// OpenBLAS build configuration and kernel set ("" without OpenBLAS).
+std::string openblas_info() {
+  auto config = reinterpret_cast<GetString>(dlsym(RTLD_DEFAULT, "openblas_get_config"));
+  auto core = reinterpret_cast<GetString>(dlsym(RTLD_DEFAULT, "openblas_get_corename"));
+  if (!config || !core) return "";
+  return std::string(config()) + " core=" + core();
+}
 SetThreads openblas_set() { return reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads")); }
 GetThreads openblas_get() { return reinterpret_cast<GetThreads>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads")); }
+
+/// Sets the OpenBLAS thread count for a scope (restores it after); false if OpenBLAS is absent.
+class BlasThreads {
+ public:
+  explicit BlasThreads(int n) : m_set(openblas_set()), m_get(openblas_get()) {
+    if (ok()) {
+      m_previous = m_get();
+      m_set(n);
+    }
+  }
+  ~BlasThreads() {
+    if (ok()) m_set(m_previous);
+  }
+  bool ok() const { return m_set && m_get; }
+
+ private:
+  SetThreads m_set;
+  GetThreads m_get;
+  int m_previous = 0;
+};
+
+/// Sets the OpenMP thread count for a scope (restores the previous one after).
+class OmpThreads {
+ public:
+  explicit OmpThreads(int n) : m_previous(omp_get_max_threads()) { omp_set_num_threads(n); }
+  ~OmpThreads() { omp_set_num_threads(m_previous); }
+
+ private:
+  int m_previous;
+};
 
 // ---------------------------------------------------------------------------------------------
 
 void BM_Assembly(benchmark::State& state) {
   Bundle& b = bundle();
   const int threads = static_cast<int>(state.range(0));
-  omp_set_num_threads(threads);
+  OmpThreads omp(threads);
   VecX g;
   std::vector<double> h;
+  b.problem->evaluate(b.q, &g, &h);  // warm-up: allocates the value array, as in a Newton loop
   for (auto _ : state) {
     double e = b.problem->evaluate(b.q, &g, &h);
     benchmark::DoNotOptimize(e);
@@ -100,15 +124,15 @@ void BM_Assembly(benchmark::State& state) {
   state.counters["elements_per_s_per_core"] =
       benchmark::Counter(elements * static_cast<double>(state.iterations()) / threads, benchmark::Counter::kIsRate);
   add_size_counters(state, b);
-  omp_set_num_threads(2);
 }
-BENCHMARK(BM_Assembly)->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Assembly)->ArgName("threads")->Arg(1)->Arg(2)->MinTime(2.0)->UseRealTime()->Unit(benchmark::kMillisecond);
 
 void BM_AssemblyGradient(benchmark::State& state) {
   Bundle& b = bundle();
   const int threads = static_cast<int>(state.range(0));
-  omp_set_num_threads(threads);
+  OmpThreads omp(threads);
   VecX g;
+  b.problem->evaluate(b.q, &g, nullptr);
   for (auto _ : state) {
     double e = b.problem->evaluate(b.q, &g, nullptr);
     benchmark::DoNotOptimize(e);
@@ -118,7 +142,6 @@ void BM_AssemblyGradient(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(elements));
   state.counters["elements_per_s_per_core"] =
       benchmark::Counter(elements * static_cast<double>(state.iterations()) / threads, benchmark::Counter::kIsRate);
-  omp_set_num_threads(2);
 }
 BENCHMARK(BM_AssemblyGradient)->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
 
@@ -136,16 +159,12 @@ BENCHMARK(BM_CholmodAnalyze)->Iterations(1)->UseRealTime()->Unit(benchmark::kMil
 void BM_CholmodFactorize(benchmark::State& state) {
   Bundle& b = bundle();
   LinearSolver& s = analysed("cholmod");
-  const int blas_threads = static_cast<int>(state.range(0));
-  SetThreads set = openblas_set();
-  GetThreads get = openblas_get();
-  if (!set || !get) {
+  BlasThreads blas(static_cast<int>(state.range(0)));
+  if (!blas.ok()) {
     state.SkipWithError("openblas_set_num_threads not found: CHOLMOD is not running on OpenBLAS");
     return;
   }
-  const int previous = get();
-  set(blas_threads);
-  omp_set_num_threads(2);
+  OmpThreads omp(2);
   for (auto _ : state) {
     FactorStatus st = s.factorize(b.hessian, 0.0);
     if (st != FactorStatus::Ok) {
@@ -153,11 +172,17 @@ void BM_CholmodFactorize(benchmark::State& state) {
       break;
     }
   }
-  set(previous);
   add_size_counters(state, b);
   state.counters["nnz_L"] = s.factor_nonzeros();
+  state.SetLabel(openblas_info());
 }
-BENCHMARK(BM_CholmodFactorize)->ArgName("blas_threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CholmodFactorize)
+    ->ArgName("blas_threads")
+    ->Arg(1)
+    ->Arg(2)
+    ->MinTime(3.0)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 void BM_CholmodSolve(benchmark::State& state) {
   Bundle& b = bundle();
@@ -180,10 +205,12 @@ void BM_NewtonIteration(benchmark::State& state) {
   Bundle& b = bundle();
   LinearSolver& s = analysed("cholmod");
   const int threads = static_cast<int>(state.range(0));
-  omp_set_num_threads(threads);
+  BlasThreads blas(static_cast<int>(state.range(1)));
+  OmpThreads omp(threads);
   VecX g, r, dq;
   std::vector<double> h;
   const std::vector<char>& fixed = b.problem->fixed();
+  b.problem->evaluate(b.q, &g, &h);  // warm-up: the solver keeps its Hessian storage between iterations
   for (auto _ : state) {
     b.problem->evaluate(b.q, &g, &h);
     r = g;
@@ -200,9 +227,14 @@ void BM_NewtonIteration(benchmark::State& state) {
   }
   add_size_counters(state, b);
   state.counters["nnz_L"] = s.factor_nonzeros();
-  omp_set_num_threads(2);
 }
-BENCHMARK(BM_NewtonIteration)->ArgName("threads")->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_NewtonIteration)
+    ->ArgNames({"threads", "blas_threads"})
+    ->Args({2, 2})
+    ->Args({2, 1})
+    ->MinTime(5.0)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 void BM_EigenFactorize(benchmark::State& state) {
   const int fibers = static_cast<int>(state.range(0));
@@ -216,7 +248,7 @@ void BM_EigenFactorize(benchmark::State& state) {
   }
   add_size_counters(state, b);
 }
-BENCHMARK(BM_EigenFactorize)->ArgName("fibers")->Arg(kFibers)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EigenFactorize)->ArgName("fibers")->Arg(kFibers)->MinTime(3.0)->UseRealTime()->Unit(benchmark::kMillisecond);
 
 void BM_EigenSolve(benchmark::State& state) {
   const int fibers = static_cast<int>(state.range(0));

@@ -317,7 +317,7 @@ TEST(CaseReader, ParsesEveryPartOfTheSchema) {
   EXPECT_EQ(c.fixes[0].node.kind, NodeRef::Kind::First);
   EXPECT_TRUE(c.fixes[0].position());
   EXPECT_TRUE(c.fixes[0].sections());
-  EXPECT_EQ(c.fixes[1].node.kind, NodeRef::Kind::Index);
+  EXPECT_EQ(c.fixes[1].node.kind, NodeRef::Kind::NodeIndex);
   EXPECT_EQ(c.fixes[1].node.index, 0);
   EXPECT_TRUE(c.fixes[1].position());
   EXPECT_FALSE(c.fixes[1].sections());
@@ -338,7 +338,7 @@ TEST(CaseReader, ParsesEveryPartOfTheSchema) {
   expect_vec(s0.loads[0].moment, Vec3(1, 2, 3));
   ASSERT_EQ(s0.displacements.size(), 1u);
   EXPECT_EQ(s0.displacements[0].node.fiber, "ring");
-  EXPECT_EQ(s0.displacements[0].node.kind, NodeRef::Kind::Index);
+  EXPECT_EQ(s0.displacements[0].node.kind, NodeRef::Kind::NodeIndex);
   EXPECT_EQ(s0.displacements[0].node.index, 16);  // the last node of 8 elements
   ASSERT_TRUE(s0.displacements[0].value[0].has_value());
   EXPECT_DOUBLE_EQ(*s0.displacements[0].value[0], 0.01);
@@ -475,7 +475,7 @@ TEST(NodeRefLabel, Formats) {
   EXPECT_EQ(ref.label(), "first");
   ref.kind = NodeRef::Kind::Last;
   EXPECT_EQ(ref.label(), "last");
-  ref.kind = NodeRef::Kind::Index;
+  ref.kind = NodeRef::Kind::NodeIndex;
   ref.index = 12;
   EXPECT_EQ(ref.label(), "12");
   ref.kind = NodeRef::Kind::Fraction;

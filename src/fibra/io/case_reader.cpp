@@ -794,7 +794,7 @@ NodeRef Reader::read_node(const Value& t, const std::string& path,
                          it->name, count, count - 1, node->integer),
              node);
       }
-      ref.kind = NodeRef::Kind::Index;
+      ref.kind = NodeRef::Kind::NodeIndex;
       ref.index = node->integer;
     } else {
       fail(key,

@@ -10,7 +10,7 @@ std::string NodeRef::label() const {
       return "first";
     case Kind::Last:
       return "last";
-    case Kind::Index:
+    case Kind::NodeIndex:
       return std::to_string(index);
     case Kind::Fraction: {
       char buffer[64];

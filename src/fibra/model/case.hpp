@@ -55,8 +55,8 @@ struct FiberSpec {
 /// A node of a fiber: "first", "last", an index, or the nearest node to a length fraction.
 struct NodeRef {
   std::string fiber;
-  enum class Kind { First, Last, Index, Fraction } kind = Kind::First;
-  Index index = 0;      ///< for Kind::Index
+  enum class Kind { First, Last, NodeIndex, Fraction } kind = Kind::First;
+  Index index = 0;      ///< for Kind::NodeIndex
   double fraction = 0;  ///< for Kind::Fraction, in [0, 1]
   std::string label() const;  ///< "first", "last", "12", or "at0.5" (used in column names)
 };

@@ -23,7 +23,7 @@ Index Model::node_index(const NodeRef& ref, const std::string& file, const std::
       return fib.first_node;
     case NodeRef::Kind::Last:
       return fib.first_node + fib.num_nodes - 1;
-    case NodeRef::Kind::Index:
+    case NodeRef::Kind::NodeIndex:
       if (ref.index < 0 || ref.index >= fib.num_nodes)
         throw InputError(file, key + ".node",
                          fmt::format("node index {} out of range: fiber \"{}\" has nodes 0..{}", ref.index,
