@@ -55,14 +55,15 @@ inline std::vector<Eigen::Vector2d> hexagonal_points(int count, double pitch) {
 }
 
 /// A bundle of `fibers` straight parallel fibers along z, each of `elements` quadratic
-/// elements, radius `radius`, length `length`, on a hexagonal grid of pitch 2.5 radius
-/// (no contact). The first node of every fiber is clamped.
-inline Case bundle_case(int fibers, int elements, double radius = 1e-5, double length = 0.01) {
+/// elements, radius `radius`, length `length`, on a hexagonal grid of pitch `pitch` radii
+/// (2.5: no contact; 2 or slightly less: touching). The first node of every fiber is clamped.
+inline Case bundle_case(int fibers, int elements, double radius = 1e-5, double length = 0.01,
+                        double pitch = 2.5) {
   Case c;
   c.name = "bench_bundle";
   c.file = "<bench>";
   c.materials.push_back(glass());
-  const std::vector<Eigen::Vector2d> xy = hexagonal_points(fibers, 2.5 * radius);
+  const std::vector<Eigen::Vector2d> xy = hexagonal_points(fibers, pitch * radius);
   for (int f = 0; f < fibers; ++f) {
     FiberSpec s;
     s.name = std::string("f").append(std::to_string(f));

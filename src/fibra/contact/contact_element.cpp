@@ -58,35 +58,46 @@ double contact_element_energy(const ContactElement& c, const double* q_a, const 
   }
   if (!grad && !hess) return energy;
 
-  Eigen::Matrix<double, 3, kContactDofs> map;
-  map.leftCols<kElementDofs>() = -particle_map(c.a);
-  map.rightCols<kElementDofs>() = particle_map(c.b);
-  // d(d)/dq = map. Force on d: -fn N (normal, pushes B away from A) + friction force.
+  // d = x_B - x_A = (c^T (x) I3) [q_A; q_B] with c the 18 coefficients N_a, N_a xi1, N_a xi2
+  // of both particles (negative for A): gradient c (x) f_d, Hessian (c c^T) (x) K3.
+  Eigen::Matrix<double, 18, 1> coef;
+  double na[3], nb[3], dn[3];
+  beam_shape(c.a.eta, na, dn);
+  beam_shape(c.b.eta, nb, dn);
+  for (int a = 0; a < 3; ++a) {
+    coef[3 * a] = -na[a];
+    coef[3 * a + 1] = -na[a] * c.a.xi1;
+    coef[3 * a + 2] = -na[a] * c.a.xi2;
+    coef[9 + 3 * a] = nb[a];
+    coef[9 + 3 * a + 1] = nb[a] * c.b.xi1;
+    coef[9 + 3 * a + 2] = nb[a] * c.b.xi2;
+  }
+  // Force on d: -fn N (normal, pushes B away from A) + friction force.
   const Vec3 force_d = -fn * nrm + fr.force;
-  if (grad) *grad = map.transpose() * force_d;
+  if (grad)
+    for (int m = 0; m < 18; ++m) grad->segment<3>(3 * m) = coef[m] * force_d;
   if (hess) {
-    const Eigen::Matrix<double, 1, kContactDofs> gn = nrm.transpose() * map;
-    *hess = c.law.stiffness_at(p) * gn.transpose() * gn;
+    Mat3 k3 = c.law.stiffness_at(p) * (nrm * nrm.transpose());
     if (kt > 0.0) {
-      Mat3 kd;
       const Vec3 t = fr.force.normalized();
       if (!consistent) {
         // Symmetric approximation: kt held fixed, and in slip only the turning of the force
         // with the trial direction.
-        kd = fr.slip ? Mat3((kt * friction.mu * fn / fr.trial_norm) * (proj - t * t.transpose())) : Mat3(kt * proj);
+        k3 += fr.slip ? Mat3((kt * friction.mu * fn / fr.trial_norm) * (proj - t * t.transpose())) : Mat3(kt * proj);
       } else {
         // Exact: kt = mu fn / delta depends on the gap, d fn / d d = -fn' N.
         const Vec3 dfn = -c.law.stiffness_at(p) * nrm;
         const Mat3 dtrial = kt * proj + (friction.mu / friction.elastic_slip) * du * dfn.transpose();
         if (!fr.slip) {
-          kd = dtrial;
+          k3 += dtrial;
         } else {
-          kd = friction.mu * t * dfn.transpose() +
-               (friction.mu * fn / fr.trial_norm) * (Mat3::Identity() - t * t.transpose()) * dtrial;
+          k3 += friction.mu * t * dfn.transpose() +
+                (friction.mu * fn / fr.trial_norm) * (Mat3::Identity() - t * t.transpose()) * dtrial;
         }
       }
-      *hess += map.transpose() * kd * map;
     }
+    for (int n = 0; n < 18; ++n)
+      for (int m = 0; m < 18; ++m) hess->block<3, 3>(3 * m, 3 * n) = (coef[m] * coef[n]) * k3;
   }
   return energy;
 }

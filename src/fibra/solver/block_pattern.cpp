@@ -13,16 +13,31 @@ void StencilSet::add(std::span<const Index> g) {
   group_begin.push_back(static_cast<Index>(groups.size()));
 }
 
-void StencilSet::colorize(Index num_groups) {
+void StencilSet::colorize(Index num_groups, int partitions) {
   if (group_begin.empty()) group_begin.push_back(0);
   const Index n = size();
-  color.assign(n, 0);
+  by_partition.assign(partitions, {});
   by_color.clear();
-  // Colours in rounds of 64: a stencil takes the lowest colour no group of it holds yet.
+  const Index width = std::max<Index>(1, (num_groups + partitions - 1) / partitions);
+  std::vector<Index> straddling;
+  for (Index s = 0; s < n; ++s) {
+    Index lo = num_groups, hi = -1;
+    for (Index g : stencil(s)) {
+      lo = std::min(lo, g);
+      hi = std::max(hi, g);
+    }
+    const Index p = hi < 0 ? 0 : lo / width;
+    if (hi < 0 || p == hi / width)
+      by_partition[p].push_back(s);
+    else
+      straddling.push_back(s);
+  }
+  // Straddling stencils: colours in rounds of 64; a stencil takes the lowest colour no group
+  // of it holds yet.
+  std::vector<int> color(n, 0);
   std::vector<std::uint64_t> used(num_groups, 0);
-  std::vector<Index> pending(n);
-  for (Index s = 0; s < n; ++s) pending[s] = s;
-  int base = 0;
+  std::vector<Index> pending = straddling;
+  int base = 0, max_color = -1;
   while (!pending.empty()) {
     std::fill(used.begin(), used.end(), 0);
     std::vector<Index> rest;
@@ -36,14 +51,13 @@ void StencilSet::colorize(Index num_groups) {
       const int c = std::countr_one(mask);
       for (Index g : stencil(s)) used[g] |= (std::uint64_t{1} << c);
       color[s] = base + c;
+      max_color = std::max(max_color, base + c);
     }
     pending.swap(rest);
     base += 64;
   }
-  int max_color = -1;
-  for (Index s = 0; s < n; ++s) max_color = std::max(max_color, color[s]);
   by_color.resize(max_color + 1);
-  for (Index s = 0; s < n; ++s) by_color[color[s]].push_back(s);
+  for (Index s : straddling) by_color[color[s]].push_back(s);
 }
 
 BlockPattern::BlockPattern(std::vector<int> group_sizes, const std::vector<const StencilSet*>& sets)

@@ -10,12 +10,16 @@
 
 namespace fibra {
 
-/// A set of stencils with their scatter offsets and a conflict-free colouring.
+/// A set of stencils and a conflict-free, cache-friendly assembly schedule: the groups are
+/// split into a fixed number of contiguous ranges (partitions); stencils inside one range are
+/// assembled in order by one thread (ranges in parallel), then the stencils that straddle
+/// ranges, coloured so that one colour shares no group, colour by colour. The schedule does
+/// not depend on the thread count, so neither do the sums.
 struct StencilSet {
   std::vector<Index> groups;         ///< flattened group lists
   std::vector<Index> group_begin;    ///< stencil s uses groups[group_begin[s] .. group_begin[s+1])
-  std::vector<int> color;            ///< stencils of one colour share no group
-  std::vector<std::vector<Index>> by_color;  ///< stencil indices per colour, ascending
+  std::vector<std::vector<Index>> by_partition;  ///< stencils inside each group range, ascending
+  std::vector<std::vector<Index>> by_color;      ///< straddling stencils per colour, ascending
 
   Index size() const { return static_cast<Index>(group_begin.size()) - 1; }  ///< stencil count
   std::span<const Index> stencil(Index s) const {  ///< groups of stencil s
@@ -23,8 +27,9 @@ struct StencilSet {
   }
   /// Appends a stencil.
   void add(std::span<const Index> g);
-  /// Greedy colouring (deterministic, linear time) so that each colour can be assembled in parallel.
-  void colorize(Index num_groups);
+  /// Builds the schedule (partitions of the group range, then greedy colouring of the
+  /// straddling stencils; deterministic, linear time).
+  void colorize(Index num_groups, int partitions = 16);
 };
 
 /// Block-structured upper-triangular CSC pattern.

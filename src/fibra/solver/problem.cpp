@@ -81,7 +81,10 @@ double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hes
   const auto t0 = std::chrono::steady_clock::now();
   if (gradient) gradient->setZero(q.size());
   if (hessian) hessian->assign(m_pattern.nonzeros(), 0.0);
-  AssemblyTarget target{&m_pattern, &m_fixed, gradient, hessian};
+  m_group_fixed.assign(m_model.num_nodes(), 0);
+  for (Index d = 0; d < q.size(); ++d)
+    if (m_fixed[d]) m_group_fixed[d / kNodeDofs] = 1;
+  AssemblyTarget target{&m_pattern, &m_fixed, &m_group_fixed, gradient, hessian};
   const Model& model = m_model;
   double energy = assemble_set<ElemVec, ElemMat>(
       m_beams, target, gradient != nullptr, hessian != nullptr, m_energy_buffer,
@@ -91,9 +94,8 @@ double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hes
       });
 
   if (!m_contacts.empty()) {
-    std::vector<double> pair_energy;
     energy += assemble_set<ContactVec, ContactMat>(
-        m_contact_pairs, target, gradient != nullptr, hessian != nullptr, pair_energy,
+        m_contact_pairs, target, gradient != nullptr, hessian != nullptr, m_contact_energy_buffer,
         [&](Index s, ContactVec* g, ContactMat* h) {
           double e = 0.0;
           ContactVec gl;

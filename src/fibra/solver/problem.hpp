@@ -61,9 +61,11 @@ class Problem {
   FrictionParams m_friction;
   BlockPattern m_pattern;
   std::vector<char> m_fixed;
+  std::vector<char> m_group_fixed;  // per node: some dof fixed (scatter fast path otherwise)
   VecX m_forces;
   std::vector<NodalMoment> m_moments;
   std::vector<double> m_energy_buffer;
+  std::vector<double> m_contact_energy_buffer;
   VecX m_energy_base;
   std::vector<Index> m_diagonal;  // value index of each diagonal entry
   AssemblyTimes m_times;

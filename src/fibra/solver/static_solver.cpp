@@ -277,7 +277,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       const double e0 = m_problem->evaluate(m_q, nullptr, nullptr);
       const double noise = 1e-11 * std::abs(e0) + 1e-14 * std::abs(s0);
       double e1 = m_problem->evaluate(trial, nullptr, nullptr);
-      for (int k = 0; k < 8 && !(std::isfinite(e1) && e1 <= e0 + 1e-4 * alpha * s0 + noise); ++k) {
+      for (int trial_k = 0; trial_k < 8 && !(std::isfinite(e1) && e1 <= e0 + 1e-4 * alpha * s0 + noise); ++trial_k) {
         // Minimum of the quadratic through e0, slope s0 and e(alpha), kept in [0.1, 0.5] alpha.
         const double a_q = std::isfinite(e1) ? -s0 * alpha * alpha / (2.0 * (e1 - e0 - s0 * alpha)) : 0.1 * alpha;
         alpha = std::clamp(a_q, 0.1 * alpha, 0.5 * alpha);
