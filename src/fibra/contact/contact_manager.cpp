@@ -6,6 +6,7 @@
 #include <map>
 
 #include "fibra/beam/beam_element.hpp"
+#include "fibra/contact/broad_phase.hpp"
 #include "fibra/contact/detection.hpp"
 
 namespace fibra {
@@ -165,6 +166,72 @@ bool ContactManager::passed_through(const std::vector<ContactElement>& contacts,
     if (contacts[k].fresh && -responses[k].gap > 0.5 * pair_radius(contacts[k]) &&
         -responses[k].gap > 4.0 * m_spec.max_penetration * pair_radius(contacts[k]))
       return true;
+  return false;
+}
+
+namespace {
+
+// Parameters (s, t) in [0, 1]^2 of the closest points of segments p0-p1 and q0-q1.
+void closest_points(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, double& s, double& t) {
+  const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+  const double a = d1.dot(d1), e = d2.dot(d2), f = d2.dot(r), c = d1.dot(r), b = d1.dot(d2);
+  const double denom = a * e - b * b;
+  s = denom > 1e-14 * a * e ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+  t = (b * s + f) / e;
+  if (t < 0.0) {
+    t = 0.0;
+    s = std::clamp(-c / a, 0.0, 1.0);
+  } else if (t > 1.0) {
+    t = 1.0;
+    s = std::clamp((b - c) / a, 0.0, 1.0);
+  }
+}
+
+}  // namespace
+
+bool ContactManager::crossed(const VecX& q_start, const VecX& q) const {
+  double motion = 0.0;
+  for (Index k = 0; k < m_model.num_nodes(); ++k)
+    motion = std::max(motion, (q.segment<3>(9 * k) - q_start.segment<3>(9 * k)).norm());
+  if (motion == 0.0) return false;
+  const VecX mid = 0.5 * (q + q_start);
+  BroadPhaseParams params;
+  params.margin = 0.5 * motion + (m_spec.margin > 0 ? m_spec.margin : 0.0);
+  params.self_exclusion = m_spec.self_exclusion;
+  BroadPhase broad(m_model, params);
+  auto chord = [&](const VecX& x, Index e, Vec3& a, Vec3& b) {
+    const Index d = m_model.elements[e].first_dof;
+    a = x.segment<3>(d);
+    b = x.segment<3>(d + 18);
+  };
+  auto radius = [&](Index e) {
+    const Section& sec = m_model.sections[m_model.fibers[m_model.elements[e].fiber].section];
+    return std::max(sec.a, sec.b);
+  };
+  for (const ElementPair& pr : broad.find_pairs(mid)) {
+    Vec3 a0, a1, b0, b1, c0, c1, e0, e1;
+    chord(q_start, pr.first, a0, a1);
+    chord(q_start, pr.second, b0, b1);
+    chord(q, pr.first, c0, c1);
+    chord(q, pr.second, e0, e1);
+    const Vec3 n_start = (a1 - a0).cross(b1 - b0), n_end = (c1 - c0).cross(e1 - e0);
+    if (n_start.norm() < 0.05 * (a1 - a0).norm() * (b1 - b0).norm() || n_end.dot(n_start) <= 0.0) continue;
+    double s0, t0, s1, t1;
+    closest_points(a0, a1, b0, b1, s0, t0);
+    closest_points(c0, c1, e0, e1, s1, t1);
+    const double side0 = (b0 + t0 * (b1 - b0) - a0 - s0 * (a1 - a0)).dot(n_start);
+    const double side1 = (e0 + t1 * (e1 - e0) - c0 - s1 * (c1 - c0)).dot(n_start);
+    if (side0 * side1 >= 0.0) continue;
+    // The common-normal side changed: at the moment it was zero (linear in time), were the
+    // chords within the sum of the radii (through each other) or apart (around an end)?
+    const double tau = side0 / (side0 - side1);
+    const Vec3 pa0 = a0 + tau * (c0 - a0), pa1 = a1 + tau * (c1 - a1);
+    const Vec3 pb0 = b0 + tau * (e0 - b0), pb1 = b1 + tau * (e1 - b1);
+    double s, t;
+    closest_points(pa0, pa1, pb0, pb1, s, t);
+    const double gap = (pb0 + t * (pb1 - pb0) - pa0 - s * (pa1 - pa0)).norm();
+    if (gap < radius(pr.first) + radius(pr.second)) return true;
+  }
   return false;
 }
 

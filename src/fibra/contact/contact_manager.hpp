@@ -49,6 +49,13 @@ class ContactManager {
   /// True if a contact element without history penetrates deeper than a fiber can within one
   /// increment (a crossing missed between detections).
   bool passed_through(const std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses) const;
+  /// True if the centroid lines of two elements crossed each other between q_start and q (a
+  /// pass-through that detections at both states would miss). Candidate pairs come from a
+  /// broad phase at the mid state with boxes grown by the largest nodal motion; each element is
+  /// taken as its chord (moving linearly in time), and a crossing is a sign change, along the
+  /// chords' common normal, of the vector between their closest points, with the chords closer
+  /// than the sum of the radii when it vanishes (not passing around an end).
+  bool crossed(const VecX& q_start, const VecX& q) const;
   /// Largest penetration of `contacts` at q (gaps along their own normals), divided by the
   /// allowed penetration of each pair.
   double penetration_ratio(const std::vector<ContactElement>& contacts, const VecX& q) const;

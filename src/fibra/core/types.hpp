@@ -1,6 +1,7 @@
 #pragma once
 /// Basic numeric types shared by all of fibra.
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products everywhere
 #include <cstdint>
 
 namespace fibra {

@@ -164,6 +164,8 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       if (contacts[k].fresh) same = m_contact->penetration_ratio({contacts[k]}, m_q) <= 0.0;
     same = same && m_contact->penetration_ratio(contacts, m_q) <= 1.0;
     if (same && raised == 0) {
+      // Fibers that went through each other within the increment: cut it.
+      if (m_contact->crossed(m_q_start, m_q)) return false;
       const std::vector<ContactResponse> final_responses = m_problem->contact_responses(m_q);
       const ContactStats st = m_contact->stats(m_problem->contacts(), final_responses);
       m_contact_stats.zones = st.zones;

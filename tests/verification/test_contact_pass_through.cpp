@@ -1,0 +1,120 @@
+// An increment that would let fibers pass through each other is cut, not accepted.
+//
+// Fiber b (pinned at its ends, 40 mm span) starts 1.5 r above contact range over fiber a
+// (clamped, crossing at right angles; centres 3.5 r apart) and a dead force F at its middle is
+// applied in ONE requested increment. Without a, F would bend b by 8 r at mid-span, through a:
+// with no contact element at the start (beyond the detection margin), Newton alone puts b's
+// centre 4.5 r below a's, and a detection at that state finds nothing (apart again, beyond the
+// margin). The loops (and, as the last guard, the swept check ContactManager::crossed) must
+// not accept that state: the run ends with b resting on a, which carries part of F.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "fibra/contact/contact_manager.hpp"
+#include "verification/verification_support.hpp"
+
+namespace fibra::test {
+namespace {
+
+TEST(ContactPassThrough, IncrementThroughAFiberIsCut) {
+  const double r = 0.5e-3, span = 40e-3, young = 210e9;
+  const double inertia = kPi * std::pow(r, 4) / 4.0;
+  const double force = 48.0 * young * inertia * (8.0 * r) / std::pow(span, 3);  // 8 r free deflection
+  const std::string toml = fmt::format(R"(
+[[material]]
+name = "steel"
+young = {E}
+poisson = 0.3
+[[fiber]]
+name = "a"
+material = "steel"
+radius = {r}
+points = [[-20e-3, 0, 0], [20e-3, 0, 0]]
+elements = 20
+[[fiber]]
+name = "b"
+material = "steel"
+radius = {r}
+points = [[0.3e-3, -20e-3, {z}], [0.3e-3, 20e-3, {z}]]
+elements = 20
+[[fix]]
+fiber = "a"
+node = "first"
+[[fix]]
+fiber = "a"
+node = "last"
+[[fix]]
+fiber = "b"
+node = "first"
+dofs = ["x", "y", "z", "g1x"]
+[[fix]]
+fiber = "b"
+node = "last"
+dofs = "position"
+[contact]
+max_penetration = 0.02
+[[step]]
+increments = 1
+  [[step.load]]
+  fiber = "b"
+  node = 20
+  force = [0, 0, {F}]
+)",
+                                       fmt::arg("E", young), fmt::arg("r", r), fmt::arg("z", 3.5 * r),
+                                       fmt::arg("F", -force));
+  const Solved s = solve_toml(toml);
+  ASSERT_TRUE(s.converged()) << s.result.message;
+  // b stays above a where they cross: centre distance at least 2 r minus the allowed penetration.
+  const Vec3 mid_a = s.x0(20, 0), mid_b = s.x0(20, 1);
+  EXPECT_GT(mid_b.z() - mid_a.z(), 2.0 * r * (1.0 - 0.02) - 1e-9);
+  // a carries part of F through the contact (b's pinned ends the rest).
+  EXPECT_GT(s.increments.back().contact.total_normal_force, 0.05 * force);
+  EXPECT_LT(s.increments.back().contact.total_normal_force, force);
+  EXPECT_LE(s.increments.back().contact.max_penetration_ratio, 0.02 * (1 + 1e-9));
+}
+
+// The swept check alone: two crossed chords, the second moving from above to below the first,
+// through it (crossed) and around its end (not crossed).
+TEST(ContactPassThrough, SweptCheckSeesLinesGoingThroughNotAround) {
+  const double r = 0.5e-3;
+  const std::string toml = fmt::format(R"(
+[[material]]
+name = "steel"
+young = 210e9
+poisson = 0.3
+[[fiber]]
+name = "a"
+material = "steel"
+radius = {r}
+points = [[-10e-3, 0, 0], [10e-3, 0, 0]]
+elements = 4
+[[fiber]]
+name = "b"
+material = "steel"
+radius = {r}
+points = [[1e-3, -10e-3, 5e-3], [1e-3, 10e-3, 5e-3]]
+elements = 4
+[contact]
+[[step]]
+)",
+                                       fmt::arg("r", r));
+  const Case c = parse_case_toml(toml, "swept.toml");
+  const Model model = build_model(c);
+  ContactManager contacts(model, c.contact);
+  const VecX start = model.reference;
+  auto moved = [&](const Vec3& shift) {
+    VecX q = start;
+    const Fiber& b = model.fibers[1];
+    for (Index k = 0; k < b.num_nodes; ++k) q.segment<3>(9 * (b.first_node + k)) += shift;
+    return q;
+  };
+  EXPECT_TRUE(contacts.crossed(start, moved(Vec3(0, 0, -10e-3))));     // straight down through a
+  EXPECT_FALSE(contacts.crossed(start, moved(Vec3(0, 0, -4e-3))));     // stops 1 mm above a
+  // Around the end of a (x = 10 mm): when b is level with a it is at x = 13.5 mm.
+  EXPECT_FALSE(contacts.crossed(start, moved(Vec3(25e-3, 0, -10e-3))));
+  EXPECT_FALSE(contacts.crossed(start, start));
+}
+
+}  // namespace
+}  // namespace fibra::test
