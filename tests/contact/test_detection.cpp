@@ -21,8 +21,8 @@
 namespace fibra {
 namespace {
 
-// Detection parameters with contact elements every (smallest) radius; the default spacing is
-// at least half an element, which these tests' coarse meshes would make sparse.
+// Detection parameters with contact elements every (smallest) radius, stated explicitly (the
+// default) since these tests count them.
 DetectionParams radius_spacing(const Model& model) {
   DetectionParams p;
   p.spacing = 1e300;

@@ -56,3 +56,71 @@ TEST(Assembly, SameBitsForOneAndTwoThreads) {
 
 }  // namespace
 }  // namespace fibra
+
+namespace fibra {
+namespace {
+
+// The assembled problem with contact pairs (the accumulate fast path of the contact kernel):
+// its Hessian is the derivative of its gradient (frictionless: exact), free-free block.
+TEST(Assembly, ContactPairsHessianMatchesFiniteDifferences) {
+  Case c;
+  c.file = "contact-fd";
+  MaterialSpec m;
+  m.name = "steel";
+  m.young = 210e9;
+  m.poisson = 0.3;
+  c.materials.push_back(m);
+  const double r = 0.5e-3;
+  FiberSpec a, b;
+  a.name = "a";
+  a.material = b.material = "steel";
+  a.radius = b.radius = r;
+  a.path.points = {Vec3(-3e-3, 0, 0), Vec3(3e-3, 0, 0)};
+  b.name = "b";
+  b.path.points = {Vec3(0.4e-3, -3e-3, 1.99 * r), Vec3(0.2e-3, 3e-3, 1.9 * r)};
+  a.elements = b.elements = 3;
+  c.fibers = {a, b};
+  const Model model = build_model(c);
+  ContactDetector detector(model);
+  Detection det = detector.detect(model.reference);
+  ASSERT_GT(det.elements.size(), 0u);
+  for (ContactElement& e : det.elements) e.law = PenaltyLaw{1e6, 1e-6};
+  Problem problem(model);
+  problem.set_contacts(det.elements, FrictionParams{0.0, 1e-6});
+  for (int d = 0; d < 9; ++d) problem.fixed()[d] = 1;  // some eliminated dofs too
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(-1, 1);
+  VecX q = model.reference;
+  for (Index i = 0; i < q.size(); ++i) q[i] += 1e-6 * u(rng);
+  VecX g;
+  std::vector<double> h;
+  problem.evaluate(q, &g, &h);
+  const Index n = q.size();
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(n, n);
+  const auto& cp = problem.pattern().col_ptr();
+  const auto& ri = problem.pattern().row_idx();
+  for (Index j = 0; j < n; ++j)
+    for (int k = cp[j]; k < cp[j + 1]; ++k) dense(ri[k], j) = dense(j, ri[k]) = h[k];
+  const double step = 1e-9;
+  Eigen::MatrixXd fd(n, n);
+  for (Index i = 0; i < n; ++i) {
+    VecX qp = q, qm = q, gp, gm;
+    qp[i] += step;
+    qm[i] -= step;
+    problem.evaluate(qp, &gp, nullptr);
+    problem.evaluate(qm, &gm, nullptr);
+    fd.col(i) = (gp - gm) / (2 * step);
+  }
+  std::vector<Index> free;
+  for (Index i = 9; i < n; ++i) free.push_back(i);
+  Eigen::MatrixXd a_free(free.size(), free.size()), fd_free(free.size(), free.size());
+  for (size_t i = 0; i < free.size(); ++i)
+    for (size_t j = 0; j < free.size(); ++j) {
+      a_free(i, j) = dense(free[i], free[j]);
+      fd_free(i, j) = fd(free[i], free[j]);
+    }
+  EXPECT_LT((a_free - fd_free).norm(), 1e-5 * fd_free.norm());
+}
+
+}  // namespace
+}  // namespace fibra

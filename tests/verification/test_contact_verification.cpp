@@ -395,9 +395,9 @@ dofs = ["x", "y", "g1z"]
   }
   std::sort(xf.begin(), xf.end());
   const int n = static_cast<int>(xf.size());
-  // The spacing defaults to max(r, h / 2) (docs/theory/contact.md), h the element length; the
-  // zone spans the whole line, so there are L / spacing elements.
-  const double spacing = std::max(r, 0.5 * length / elements);
+  // The spacing defaults to the radius (docs/theory/contact.md); the zone spans the whole
+  // line, so there are L / spacing elements.
+  const double spacing = r;
   EXPECT_EQ(n, static_cast<int>(std::lround(length / spacing)));
   std::vector<double> gaps, forces;
   for (int k = 0; k + 1 < n; ++k) gaps.push_back(xf[k + 1].first - xf[k].first);
@@ -495,6 +495,7 @@ elements = 30
 [contact]
 friction = {4}
 max_penetration = 0.05
+spacing = {5}  # contact elements every half rope element (calibrated with the 1 um pull steps)
 # The rope is held by contact and friction only; out of its plane it is held by y at every node
 # and its spin about its axis by g1z at its middle node (neither carries load).
 [[fix]]
@@ -502,7 +503,8 @@ fiber = "rope"
 node = 30
 dofs = ["y", "g1z"]
 )",
-                                 rail_r, arc, r, arc + rail_r + r - 1e-4 * r, mu);
+                                 rail_r, arc, r, arc + rail_r + r - 1e-4 * r, mu,
+                                 std::max(r, 0.5 * kPi * (arc + rail_r + r) / 30.0));
   for (int n = 0; n <= 60; ++n) {
     toml += fmt::format("[[fix]]\nfiber = \"rail\"\nnode = {}\n", n);
     if (n != 30) toml += fmt::format("[[fix]]\nfiber = \"rope\"\nnode = {}\ndofs = [\"y\"]\n", n);

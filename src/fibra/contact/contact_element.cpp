@@ -29,7 +29,7 @@ Vec3 particle_position(const Particle& p, const double* q) {
 
 double contact_element_energy(const ContactElement& c, const double* q_a, const double* q_b,
                               const FrictionParams& friction, ContactVec* grad, ContactMat* hess,
-                              ContactResponse* response, bool consistent) {
+                              ContactResponse* response, bool consistent, bool accumulate) {
   const Vec3 d = particle_position(c.b, q_b) - particle_position(c.a, q_a);
   const Vec3& nrm = c.normal;
   const double gap = d.dot(nrm);
@@ -74,8 +74,12 @@ double contact_element_energy(const ContactElement& c, const double* q_a, const 
   }
   // Force on d: -fn N (normal, pushes B away from A) + friction force.
   const Vec3 force_d = -fn * nrm + fr.force;
-  if (grad)
-    for (int m = 0; m < 18; ++m) grad->segment<3>(3 * m) = coef[m] * force_d;
+  if (grad) {
+    if (accumulate)
+      for (int m = 0; m < 18; ++m) grad->segment<3>(3 * m) += coef[m] * force_d;
+    else
+      for (int m = 0; m < 18; ++m) grad->segment<3>(3 * m) = coef[m] * force_d;
+  }
   if (hess) {
     Mat3 k3 = c.law.stiffness_at(p) * (nrm * nrm.transpose());
     if (kt > 0.0) {
@@ -96,8 +100,13 @@ double contact_element_energy(const ContactElement& c, const double* q_a, const 
         }
       }
     }
-    for (int n = 0; n < 18; ++n)
-      for (int m = 0; m < 18; ++m) hess->block<3, 3>(3 * m, 3 * n) = (coef[m] * coef[n]) * k3;
+    if (accumulate) {
+      for (int n = 0; n < 18; ++n)
+        for (int m = 0; m <= n; ++m) hess->block<3, 3>(3 * m, 3 * n) += (coef[m] * coef[n]) * k3;
+    } else {
+      for (int n = 0; n < 18; ++n)
+        for (int m = 0; m < 18; ++m) hess->block<3, 3>(3 * m, 3 * n) = (coef[m] * coef[n]) * k3;
+    }
   }
   return energy;
 }

@@ -63,9 +63,11 @@ Vec3 particle_position(const Particle& p, const double* q_e);
 /// and Hessian with respect to [q_A; q_B]; q_a, q_b are the current element dofs. Friction
 /// force is computed by return mapping from the element's history. The Hessian is exact for
 /// the normal part; for friction it is the symmetric approximation used by the solver, or,
-/// with `consistent`, the exact (non-symmetric) derivative of the gradient.
+/// with `consistent`, the exact (non-symmetric) derivative of the gradient. With `accumulate`,
+/// grad and hess are added to, and only the upper 3x3 blocks of hess (block row <= block
+/// column) are written: what the assembler scatters (the fast path of Problem).
 double contact_element_energy(const ContactElement& c, const double* q_a, const double* q_b,
                               const FrictionParams& friction, ContactVec* grad, ContactMat* hess,
-                              ContactResponse* response, bool consistent = false);
+                              ContactResponse* response, bool consistent = false, bool accumulate = false);
 
 }  // namespace fibra

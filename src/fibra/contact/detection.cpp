@@ -281,10 +281,8 @@ void ContactDetector::detect_fiber(int fiber, const VecX& q, Workspace& work, Fi
     ctx.count_j = fib_j.num_elements;
     ctx.length_i = fib_i.length / static_cast<double>(fib_i.num_elements);
     ctx.length_j = fib_j.length / static_cast<double>(fib_j.num_elements);
-    // Default spacing: the smaller radius, but no closer than half the shorter element (two
-    // contact elements per beam element resolve a contact line as well as the beam can).
-    ctx.spacing = m_params.spacing > 0 ? m_params.spacing
-                                       : std::max(ctx.r_min, 0.5 * std::min(ctx.length_i, ctx.length_j));
+    // Default spacing: the smaller radius (METHOD §2).
+    ctx.spacing = m_params.spacing > 0 ? m_params.spacing : ctx.r_min;
     ctx.exclusion = m_broad.self_exclusion(fiber);
     // Samples: at most the smaller radius and half an element apart, and at most half the
     // shortest zone of a touching crossing, 2 sqrt(2 (r_i + r_j) m + m^2), so none is missed.
