@@ -954,7 +954,7 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   expect_table(t, path);
   check_keys(t, path,
              {"residual_tolerance", "displacement_tolerance", "max_iterations", "max_cuts",
-              "line_search", "linear_solver"});
+              "line_search", "linear_solver", "ordering"});
   SolverSpec s;
   if (const Value* v = find(t, "residual_tolerance")) {
     s.residual_tolerance = positive(*v, join(path, "residual_tolerance"));
@@ -975,6 +975,17 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
       fail(key,
            fmt::format("expected \"cholmod\" or \"eigen\", got \"{}\"{}", s.linear_solver,
                        did_you_mean(s.linear_solver, words)),
+           v);
+    }
+  }
+  if (const Value* v = find(t, "ordering")) {
+    const std::string key = join(path, "ordering");
+    s.ordering = to_string(*v, key);
+    if (s.ordering != "metis" && s.ordering != "amd" && s.ordering != "auto") {
+      const Keys words = {"metis", "amd", "auto"};
+      fail(key,
+           fmt::format("expected \"metis\", \"amd\" or \"auto\", got \"{}\"{}", s.ordering,
+                       did_you_mean(s.ordering, words)),
            v);
     }
   }

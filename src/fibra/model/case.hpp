@@ -107,6 +107,7 @@ struct SolverSpec {
   int max_cuts = 12;                     ///< successive halvings of an increment
   bool line_search = true;
   std::string linear_solver = "cholmod";  ///< "cholmod" or "eigen"
+  std::string ordering = "metis";         ///< CHOLMOD fill-reducing ordering: "metis", "amd" or "auto"
 };
 
 /// Contact and friction settings ([contact] table); contact is off when the table is absent.

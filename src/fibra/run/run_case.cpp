@@ -84,6 +84,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   j["timings"] = {{"total", report.wall_time}, {"assembly", s.time_assembly},
                   {"factorization", s.time_factorization}, {"solve", s.time_solve}, {"output", time_output}};
   j["solver"] = {{"linear_solver", c.solver.linear_solver},
+                 {"ordering", c.solver.ordering},
                  {"threads", omp_get_max_threads()},
                  {"increments", s.increments},
                  {"iterations", s.iterations},

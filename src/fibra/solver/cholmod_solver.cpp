@@ -10,11 +10,15 @@ namespace {
 
 class CholmodSolver final : public LinearSolver {
  public:
-  CholmodSolver() {
+  explicit CholmodSolver(const std::string& ordering) {
     cholmod_start(&m_common);
     m_common.supernodal = CHOLMOD_SUPERNODAL;
-    m_common.nmethods = 1;
-    m_common.method[0].ordering = CHOLMOD_METIS;
+    if (ordering == "auto") {
+      m_common.nmethods = 0;  // CHOLMOD's default strategy
+    } else {
+      m_common.nmethods = 1;
+      m_common.method[0].ordering = ordering == "amd" ? CHOLMOD_AMD : CHOLMOD_METIS;
+    }
     m_common.postorder = 1;
     m_common.quick_return_if_not_posdef = 1;
     m_common.print = 0;
@@ -87,6 +91,10 @@ class CholmodSolver final : public LinearSolver {
 
 }  // namespace
 
-std::unique_ptr<LinearSolver> make_cholmod_solver() { return std::make_unique<CholmodSolver>(); }
+std::unique_ptr<LinearSolver> make_cholmod_solver(const std::string& ordering) {
+  if (ordering != "metis" && ordering != "amd" && ordering != "auto")
+    throw std::invalid_argument("unknown ordering \"" + ordering + "\" (expected \"metis\", \"amd\" or \"auto\")");
+  return std::make_unique<CholmodSolver>(ordering);
+}
 
 }  // namespace fibra

@@ -7,7 +7,7 @@
 
 namespace fibra {
 
-std::unique_ptr<LinearSolver> make_cholmod_solver();
+std::unique_ptr<LinearSolver> make_cholmod_solver(const std::string& ordering);
 
 namespace {
 
@@ -41,8 +41,8 @@ class EigenSolver final : public LinearSolver {
 
 }  // namespace
 
-std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name) {
-  if (name == "cholmod") return make_cholmod_solver();
+std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name, const std::string& ordering) {
+  if (name == "cholmod") return make_cholmod_solver(ordering);
   if (name == "eigen") return std::make_unique<EigenSolver>();
   throw std::invalid_argument("unknown linear solver \"" + name + "\" (expected \"cholmod\" or \"eigen\")");
 }

@@ -30,6 +30,8 @@ class LinearSolver {
 };
 
 /// Creates a solver by name ("cholmod" or "eigen"); throws std::invalid_argument otherwise.
-std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name);
+/// `ordering` (CHOLMOD only): "metis" (default), "amd", or "auto" (CHOLMOD's own choice: AMD,
+/// then METIS when AMD fills badly).
+std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name, const std::string& ordering = "metis");
 
 }  // namespace fibra

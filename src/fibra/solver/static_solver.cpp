@@ -41,7 +41,7 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 StaticSolver::StaticSolver(const Case& c, const Model& model)
     : m_case(c), m_model(model), m_problem(std::make_unique<Problem>(model)),
-      m_linear(make_linear_solver(c.solver.linear_solver)), m_program(std::make_unique<Program>()),
+      m_linear(make_linear_solver(c.solver.linear_solver, c.solver.ordering)), m_program(std::make_unique<Program>()),
       m_q(model.reference) {
   const Index n = model.num_dofs();
   m_program->force_start = m_program->force_end = VecX::Zero(n);
