@@ -245,16 +245,16 @@ double ContactManager::penetration_ratio(const std::vector<ContactElement>& cont
   return worst;
 }
 
-ContactStats ContactManager::stats(const std::vector<ContactElement>& contacts,
-                                   const std::vector<ContactResponse>& responses) const {
-  ContactStats s;
-  s.zones = m_zones;
-  s.elements = static_cast<int>(contacts.size());
+void ContactManager::add_stats(const std::vector<ContactElement>& contacts,
+                               const std::vector<ContactResponse>& responses, ContactStats& out) const {
+  out.zones = m_zones;
+  out.elements = static_cast<int>(contacts.size());
+  out.max_penetration_ratio = 0.0;
+  out.total_normal_force = 0.0;
   for (size_t k = 0; k < contacts.size(); ++k) {
-    s.max_penetration_ratio = std::max(s.max_penetration_ratio, -responses[k].gap / pair_radius(contacts[k]));
-    s.total_normal_force += responses[k].normal_force;
+    out.max_penetration_ratio = std::max(out.max_penetration_ratio, -responses[k].gap / pair_radius(contacts[k]));
+    out.total_normal_force += responses[k].normal_force;
   }
-  return s;
 }
 
 }  // namespace fibra

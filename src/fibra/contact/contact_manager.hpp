@@ -59,8 +59,10 @@ class ContactManager {
   /// Largest penetration of `contacts` at q (gaps along their own normals), divided by the
   /// allowed penetration of each pair.
   double penetration_ratio(const std::vector<ContactElement>& contacts, const VecX& q) const;
-  /// Statistics of contacts at their responses.
-  ContactStats stats(const std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses) const;
+  /// Fills the state statistics of `out` (zones, elements, largest penetration ratio, total
+  /// normal force) from contacts at their responses; the loop counters are left as they are.
+  void add_stats(const std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses,
+                 ContactStats& out) const;
   /// Friction parameters.
   FrictionParams friction() const { return m_friction; }
   const ContactSpec& spec() const { return m_spec; }  ///< settings

@@ -30,7 +30,6 @@ struct StaticSolver::Program {
   std::map<Index, std::pair<Vec3, Vec3>> moments;   // node -> (start, end)
   std::map<Index, std::pair<double, double>> disp;  // dof -> (start, end) of u = q - ref
   std::vector<char> fix_mask;                       // [[fix]] dofs (held at reference)
-  std::vector<std::vector<std::pair<Index, int>>> load_nodes;  // per step: resolved (node, entry)
 };
 
 namespace {
@@ -46,16 +45,20 @@ StaticSolver::StaticSolver(const Case& c, const Model& model)
   const Index n = model.num_dofs();
   m_program->force_start = m_program->force_end = VecX::Zero(n);
   m_program->fix_mask.assign(n, 0);
+  // One reaction column triple per supported or driven node, in order of first mention.
+  auto add_reaction = [&](const NodeRef& ref, Index node) {
+    const std::string label = fmt::format("reaction:{}:{}", ref.fiber, ref.label());
+    if (std::find(m_reaction_columns.begin(), m_reaction_columns.end(), label + ":x") != m_reaction_columns.end())
+      return;
+    for (const char* axis : {"x", "y", "z"}) m_reaction_columns.push_back(label + ":" + axis);
+    m_reaction_nodes.push_back(node);
+  };
   for (size_t i = 0; i < c.fixes.size(); ++i) {
     const FixSpec& f = c.fixes[i];
     const Index node = model.node_index(f.node, c.file, fmt::format("fix[{}]", i));
     for (int k = 0; k < 9; ++k)
       if (f.dofs[k]) m_program->fix_mask[9 * node + k] = 1;
-    const std::string label = fmt::format("reaction:{}:{}", f.node.fiber, f.node.label());
-    if (std::find(m_reaction_columns.begin(), m_reaction_columns.end(), label + ":x") == m_reaction_columns.end()) {
-      for (const char* axis : {"x", "y", "z"}) m_reaction_columns.push_back(label + ":" + axis);
-      m_reaction_nodes.push_back(node);
-    }
+    add_reaction(f.node, node);
   }
   for (size_t s = 0; s < c.steps.size(); ++s) {
     const StepSpec& st = c.steps[s];
@@ -63,12 +66,7 @@ StaticSolver::StaticSolver(const Case& c, const Model& model)
       model.node_index(st.loads[i].node, c.file, fmt::format("step[{}].load[{}]", s, i));
     for (size_t i = 0; i < st.displacements.size(); ++i) {
       const NodeRef& ref = st.displacements[i].node;
-      const Index node = model.node_index(ref, c.file, fmt::format("step[{}].displacement[{}]", s, i));
-      const std::string label = fmt::format("reaction:{}:{}", ref.fiber, ref.label());
-      if (std::find(m_reaction_columns.begin(), m_reaction_columns.end(), label + ":x") == m_reaction_columns.end()) {
-        for (const char* axis : {"x", "y", "z"}) m_reaction_columns.push_back(label + ":" + axis);
-        m_reaction_nodes.push_back(node);
-      }
+      add_reaction(ref, model.node_index(ref, c.file, fmt::format("step[{}].displacement[{}]", s, i)));
     }
   }
   m_force_scale = VecX::Ones(n);
@@ -166,12 +164,9 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     if (same && raised == 0) {
       // Fibers that went through each other within the increment: cut it.
       if (m_contact->crossed(m_q_start, m_q)) return false;
-      const std::vector<ContactResponse> final_responses = m_problem->contact_responses(m_q);
-      const ContactStats st = m_contact->stats(m_problem->contacts(), final_responses);
-      m_contact_stats.zones = st.zones;
-      m_contact_stats.elements = st.elements;
-      m_contact_stats.max_penetration_ratio = st.max_penetration_ratio;
-      m_contact_stats.total_normal_force = st.total_normal_force;
+      // Nothing changed since `responses` (same state, elements, normals and penalties).
+      m_contact->add_stats(m_problem->contacts(), responses, m_contact_stats);
+      m_contact_responses = responses;
       return true;
     }
     if (raised > 0) {
@@ -405,7 +400,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       info.step_end = lambda >= 1.0;
       info.reactions = reactions(m_gradient);
       if (m_contact) {
-        info.contact_responses = m_problem->contact_responses(m_q);
+        info.contact_responses = m_contact_responses;
         m_contact->commit(m_problem->contacts(), info.contact_responses, m_q);
         info.contact = m_contact_stats;
       }

@@ -93,6 +93,7 @@ class StaticSolver {
   std::unique_ptr<Program> m_program;
   std::unique_ptr<ContactManager> m_contact;  // null without [contact]
   ContactStats m_contact_stats;
+  std::vector<ContactResponse> m_contact_responses;  // at the accepted state of the increment
   VecX m_q;
   VecX m_q_start;  // state at the start of the current increment
   VecX m_gradient;
