@@ -4,18 +4,6 @@
 
 namespace fibra {
 
-Eigen::Matrix<double, 3, kElementDofs> particle_map(const Particle& p) {
-  double n[3], dn[3];
-  beam_shape(p.eta, n, dn);
-  Eigen::Matrix<double, 3, kElementDofs> b = Eigen::Matrix<double, 3, kElementDofs>::Zero();
-  for (int a = 0; a < 3; ++a) {
-    b.block<3, 3>(0, 9 * a).diagonal().setConstant(n[a]);
-    b.block<3, 3>(0, 9 * a + 3).diagonal().setConstant(n[a] * p.xi1);
-    b.block<3, 3>(0, 9 * a + 6).diagonal().setConstant(n[a] * p.xi2);
-  }
-  return b;
-}
-
 Vec3 particle_position(const Particle& p, const double* q) {
   double n[3], dn[3];
   beam_shape(p.eta, n, dn);

@@ -53,9 +53,6 @@ struct FrictionParams {
   double elastic_slip = 0;  ///< delta [m]: tangential stiffness mu f_n / delta
 };
 
-/// The 3x27 map from element dofs to the position of particle p: x = B q_e.
-Eigen::Matrix<double, 3, kElementDofs> particle_map(const Particle& p);
-
 /// Position of particle p from the element dofs q_e (27 values).
 Vec3 particle_position(const Particle& p, const double* q_e);
 

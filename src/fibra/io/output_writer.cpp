@@ -128,6 +128,16 @@ VtuArray vtu_array(std::string name, std::string type, int components, const std
                   v.size() / static_cast<size_t>(components)};
 }
 
+void push3(std::vector<double>& v, const Vec3& x) { v.insert(v.end(), {x[0], x[1], x[2]}); }
+
+/// Nodal state used by both .vtu files.
+struct NodeState {
+  Vec3 x0, g1, g2;        ///< current
+  Vec3 x0_ref, g1_ref, g2_ref;  ///< reference
+  double strain = 0;
+  double force = 0;
+};
+
 /// One .vtu piece: points, point data, and cells given by connectivity/offsets/types.
 struct VtuPiece {
   std::vector<double> points;         ///< 3 per point
@@ -142,6 +152,18 @@ struct VtuPiece {
   std::vector<std::int64_t> offsets;
   std::vector<std::uint8_t> types;
 
+  /// Appends one point of node `node` of fiber `fiber` with the node's state.
+  void add_point(const Vec3& x, const Vec3& u, const NodeState& s, size_t fiber_index, Index node_index) {
+    push3(points, x);
+    push3(displacement, u);
+    axial_strain.push_back(s.strain);
+    axial_force.push_back(s.force);
+    push3(g1, s.g1);
+    push3(g2, s.g2);
+    fiber.push_back(static_cast<std::int32_t>(fiber_index));
+    node.push_back(static_cast<std::int32_t>(node_index));
+  }
+
   void reserve(size_t n_points) {
     points.reserve(3 * n_points);
     displacement.reserve(3 * n_points);
@@ -154,7 +176,6 @@ struct VtuPiece {
   }
 };
 
-void push3(std::vector<double>& v, const Vec3& x) { v.insert(v.end(), {x[0], x[1], x[2]}); }
 
 /// Writes one .vtu with the given point data, points and cells (appended raw binary).
 void write_vtu_arrays(const std::string& path, double time, size_t n_points, size_t n_cells,
@@ -221,13 +242,6 @@ void write_vtu_file(const std::string& path, const VtuPiece& p, double time) {
                    "displacement");
 }
 
-/// Nodal state used by both .vtu files.
-struct NodeState {
-  Vec3 x0, g1, g2;        ///< current
-  Vec3 x0_ref, g1_ref, g2_ref;  ///< reference
-  double strain = 0;
-  double force = 0;
-};
 
 constexpr std::uint8_t kVtkPolyLine = 4;
 constexpr std::uint8_t kVtkQuad = 9;
@@ -387,14 +401,7 @@ void OutputWriter::write_vtu(const VecX& q, int index, double time) const {
     const Fiber& fib = m_model.fibers[f];
     for (Index j = 0; j < fib.num_nodes; ++j) {
       const NodeState& s = nodes[fib.first_node + j];
-      push3(lines.points, s.x0);
-      push3(lines.displacement, s.x0 - s.x0_ref);
-      lines.axial_strain.push_back(s.strain);
-      lines.axial_force.push_back(s.force);
-      push3(lines.g1, s.g1);
-      push3(lines.g2, s.g2);
-      lines.fiber.push_back(static_cast<std::int32_t>(f));
-      lines.node.push_back(static_cast<std::int32_t>(j));
+      lines.add_point(s.x0, s.x0 - s.x0_ref, s, f, j);
       lines.connectivity.push_back(fib.first_node + j);
     }
     if (fib.num_nodes >= 2) {
@@ -425,14 +432,7 @@ void OutputWriter::write_vtu(const VecX& q, int index, double time) const {
       for (int i = 0; i < n_sides; ++i) {
         const Vec3 offset = sec.a * cos_t[i] * s.g1 + sec.b * sin_t[i] * s.g2;
         const Vec3 offset_ref = sec.a * cos_t[i] * s.g1_ref + sec.b * sin_t[i] * s.g2_ref;
-        push3(tubes.points, s.x0 + offset);
-        push3(tubes.displacement, (s.x0 + offset) - (s.x0_ref + offset_ref));
-        tubes.axial_strain.push_back(s.strain);
-        tubes.axial_force.push_back(s.force);
-        push3(tubes.g1, s.g1);
-        push3(tubes.g2, s.g2);
-        tubes.fiber.push_back(static_cast<std::int32_t>(f));
-        tubes.node.push_back(static_cast<std::int32_t>(j));
+        tubes.add_point(s.x0 + offset, (s.x0 + offset) - (s.x0_ref + offset_ref), s, f, j);
       }
     }
     for (Index j = 0; j + 1 < fib.num_nodes; ++j) {
