@@ -2,11 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <toml++/toml.h>
@@ -219,6 +221,39 @@ void expect_same_case(const Case& a, const Case& b) {
       EXPECT_EQ(x.displacements[k].value, y.displacements[k].value);
     }
   }
+  ASSERT_EQ(a.bodies.size(), b.bodies.size());
+  for (std::size_t i = 0; i < a.bodies.size(); ++i) {
+    EXPECT_EQ(a.bodies[i].name, b.bodies[i].name);
+    expect_vec(a.bodies[i].center, b.bodies[i].center);
+    EXPECT_EQ(a.bodies[i].axes, b.bodies[i].axes);
+  }
+  ASSERT_EQ(a.bindings.size(), b.bindings.size());
+  for (std::size_t i = 0; i < a.bindings.size(); ++i) {
+    EXPECT_EQ(a.bindings[i].body, b.bindings[i].body);
+    EXPECT_EQ(a.bindings[i].line, b.bindings[i].line);
+    EXPECT_EQ(a.bindings[i].bodies, b.bindings[i].bodies);
+    ASSERT_EQ(a.bindings[i].ends.size(), b.bindings[i].ends.size());
+    for (std::size_t k = 0; k < a.bindings[i].ends.size(); ++k) {
+      expect_same_node(a.bindings[i].ends[k], b.bindings[i].ends[k]);
+    }
+  }
+  for (std::size_t i = 0; i < a.steps.size(); ++i) {
+    const StepSpec& x = a.steps[i];
+    const StepSpec& y = b.steps[i];
+    ASSERT_EQ(x.bodies.size(), y.bodies.size());
+    for (std::size_t k = 0; k < x.bodies.size(); ++k) {
+      EXPECT_EQ(x.bodies[k].name, y.bodies[k].name);
+      EXPECT_EQ(x.bodies[k].has_displacement, y.bodies[k].has_displacement);
+      EXPECT_EQ(x.bodies[k].displacement, y.bodies[k].displacement);
+      EXPECT_EQ(x.bodies[k].has_rotation, y.bodies[k].has_rotation);
+      EXPECT_EQ(x.bodies[k].rotation, y.bodies[k].rotation);
+      EXPECT_EQ(x.bodies[k].force, y.bodies[k].force);
+      EXPECT_EQ(x.bodies[k].moment, y.bodies[k].moment);
+    }
+  }
+  EXPECT_DOUBLE_EQ(a.solver.binding_tolerance, b.solver.binding_tolerance);
+  EXPECT_EQ(a.solver.max_binding_updates, b.solver.max_binding_updates);
+  EXPECT_DOUBLE_EQ(a.solver.binding_stiffness, b.solver.binding_stiffness);
   EXPECT_DOUBLE_EQ(a.solver.residual_tolerance, b.solver.residual_tolerance);
   EXPECT_DOUBLE_EQ(a.solver.displacement_tolerance, b.solver.displacement_tolerance);
   EXPECT_EQ(a.solver.max_iterations, b.solver.max_iterations);
@@ -388,6 +423,12 @@ TEST(CaseReader, MinimalCaseTakesDefaults) {
   EXPECT_EQ(c.solver.max_cuts, solver_defaults.max_cuts);
   EXPECT_EQ(c.solver.line_search, solver_defaults.line_search);
   EXPECT_EQ(c.solver.linear_solver, "cholmod");
+  EXPECT_TRUE(c.bodies.empty());
+  EXPECT_TRUE(c.bindings.empty());
+  EXPECT_TRUE(c.steps[0].bodies.empty());
+  EXPECT_EQ(c.solver.binding_tolerance, solver_defaults.binding_tolerance);
+  EXPECT_EQ(c.solver.max_binding_updates, solver_defaults.max_binding_updates);
+  EXPECT_EQ(c.solver.binding_stiffness, solver_defaults.binding_stiffness);
   EXPECT_EQ(c.output.every, 1);
   EXPECT_EQ(c.output.tube_sides, 12);
 }
@@ -789,6 +830,365 @@ increments = 1
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("fix[0].dofs[2]"), std::string::npos) << e.what();
   }
+}
+
+}  // namespace
+}  // namespace fibra
+
+// ------------------------------------------------------------------------------------------
+// Rigid bodies ([[body]]), averaged bindings ([[binding]]) and [[step.body]].
+
+namespace fibra {
+namespace {
+
+/// Three fibers; two tows (bodies) bound to fiber ends, both bound to a grip: a two-level
+/// hierarchy. The grip is driven with some components free.
+const std::string kBodies = R"(
+[[material]]
+name = "steel"
+young = 2e11
+poisson = 0.3
+
+[[fiber]]
+name = "f1"
+material = "steel"
+radius = 0.01
+points = [[0, 0, 0], [1, 0, 0]]
+elements = 4
+
+[[fiber]]
+name = "f2"
+material = "steel"
+radius = 0.01
+points = [[0, 0.1, 0], [1, 0.1, 0]]
+elements = 4
+
+[[fiber]]
+name = "f3"
+material = "steel"
+radius = 0.01
+points = [[0, 0.2, 0], [1, 0.2, 0]]
+elements = 4
+
+[[body]]
+name = "grip"
+center = [1.0, 0.1, 0]
+axes = [[0, 1, 0], [-1, 0, 0], [0, 0, 1]]
+
+[[body]]
+name = "towA"
+center = [1, 0.05, 0]
+
+[[body]]
+name = "towB"
+center = [1, 0.2, 0]
+
+[[binding]]
+body = "towA"
+ends = [{ fiber = "f1", node = "last" }, { fiber = "f2", at = 1 }]
+
+[[binding]]
+body = "towB"
+ends = [{ fiber = "f3", node = 8 }]
+
+[[binding]]
+body = "grip"
+bodies = ["towA", "towB"]
+
+[[step]]
+name = "pull"
+increments = 4
+
+  [[step.body]]
+  name = "grip"
+  displacement = [0.01, 0, "free"]
+  rotation = ["free", "free", 0.5]
+  force = [0, 0, 10]
+  moment = [1, 2, 0]
+
+  [[step.body]]
+  name = "towA"
+  force = [0, -3, 0]
+
+[[step]]
+name = "release"
+
+  [[step.body]]
+  name = "grip"
+  displacement = ["free", "free", "free"]
+
+[solver]
+binding_tolerance = 1e-6
+max_binding_updates = 12
+binding_stiffness = 1e5
+)";
+
+void expect_bodies_case(const Case& c) {
+  ASSERT_EQ(c.bodies.size(), 3u);
+  EXPECT_EQ(c.bodies[0].name, "grip");
+  expect_vec(c.bodies[0].center, Vec3(1, 0.1, 0));
+  // Rows D1, D2, D3 in the file, columns in BodySpec::axes.
+  expect_vec(c.bodies[0].axes.col(0), Vec3(0, 1, 0));
+  expect_vec(c.bodies[0].axes.col(1), Vec3(-1, 0, 0));
+  expect_vec(c.bodies[0].axes.col(2), Vec3(0, 0, 1));
+  EXPECT_EQ(c.bodies[1].name, "towA");
+  expect_vec(c.bodies[1].center, Vec3(1, 0.05, 0));
+  EXPECT_EQ(c.bodies[1].axes, Mat3::Identity());  // default frame
+  EXPECT_EQ(c.bodies[2].name, "towB");
+
+  ASSERT_EQ(c.bindings.size(), 3u);
+  const BindingSpec& a = c.bindings[0];
+  EXPECT_EQ(a.body, "towA");
+  EXPECT_EQ(a.line, 0);
+  EXPECT_TRUE(a.bodies.empty());
+  ASSERT_EQ(a.ends.size(), 2u);
+  EXPECT_EQ(a.ends[0].fiber, "f1");
+  EXPECT_EQ(a.ends[0].kind, NodeRef::Kind::Last);
+  EXPECT_EQ(a.ends[1].fiber, "f2");
+  EXPECT_EQ(a.ends[1].kind, NodeRef::Kind::Fraction);
+  EXPECT_DOUBLE_EQ(a.ends[1].fraction, 1.0);
+  const BindingSpec& b = c.bindings[1];
+  EXPECT_EQ(b.body, "towB");
+  EXPECT_EQ(b.line, 1);
+  ASSERT_EQ(b.ends.size(), 1u);
+  EXPECT_EQ(b.ends[0].kind, NodeRef::Kind::NodeIndex);
+  EXPECT_EQ(b.ends[0].index, 8);
+  const BindingSpec& g = c.bindings[2];
+  EXPECT_EQ(g.body, "grip");
+  EXPECT_EQ(g.line, 2);
+  EXPECT_TRUE(g.ends.empty());
+  EXPECT_EQ(g.bodies, (std::vector<std::string>{"towA", "towB"}));
+
+  ASSERT_EQ(c.steps.size(), 2u);
+  ASSERT_EQ(c.steps[0].bodies.size(), 2u);
+  const BodyStepSpec& grip = c.steps[0].bodies[0];
+  EXPECT_EQ(grip.name, "grip");
+  EXPECT_TRUE(grip.has_displacement);
+  EXPECT_EQ(grip.displacement, (std::array<std::optional<double>, 3>{0.01, 0.0, std::nullopt}));
+  EXPECT_TRUE(grip.has_rotation);
+  EXPECT_EQ(grip.rotation, (std::array<std::optional<double>, 3>{std::nullopt, std::nullopt, 0.5}));
+  ASSERT_TRUE(grip.force.has_value());
+  expect_vec(*grip.force, Vec3(0, 0, 10));  // z is free: a force there is allowed
+  ASSERT_TRUE(grip.moment.has_value());
+  expect_vec(*grip.moment, Vec3(1, 2, 0));
+  const BodyStepSpec& tow = c.steps[0].bodies[1];
+  EXPECT_EQ(tow.name, "towA");
+  EXPECT_FALSE(tow.has_displacement);
+  EXPECT_FALSE(tow.has_rotation);
+  EXPECT_FALSE(tow.moment.has_value());
+  ASSERT_TRUE(tow.force.has_value());
+  expect_vec(*tow.force, Vec3(0, -3, 0));
+  ASSERT_EQ(c.steps[1].bodies.size(), 1u);
+  const BodyStepSpec& release = c.steps[1].bodies[0];
+  EXPECT_TRUE(release.has_displacement);  // every component released
+  EXPECT_EQ(release.displacement, (std::array<std::optional<double>, 3>{}));
+  EXPECT_FALSE(release.has_rotation);
+  EXPECT_FALSE(release.force.has_value());
+
+  EXPECT_DOUBLE_EQ(c.solver.binding_tolerance, 1e-6);
+  EXPECT_EQ(c.solver.max_binding_updates, 12);
+  EXPECT_DOUBLE_EQ(c.solver.binding_stiffness, 1e5);
+}
+
+TEST(CaseReaderBodies, ParsesBodiesBindingsAndStepBodies) {
+  const Case c = parse_case_toml(kBodies, "bodies.toml");
+  expect_bodies_case(c);
+}
+
+TEST(CaseReaderBodies, JsonGivesTheSameCaseAsToml) {
+  const Case from_toml = parse_case_toml(kBodies, "bodies.toml");
+  const Case from_json = parse_case_json(to_json(kBodies), "bodies.json");
+  expect_bodies_case(from_json);
+  expect_same_case(from_toml, from_json);
+}
+
+TEST(CaseReaderBodies, HandWrittenJson) {
+  const std::string json = R"({
+    "material": [{"name": "steel", "young": 2e11, "poisson": 0.25}],
+    "fiber": [{"name": "beam", "material": "steel", "radius": 0.01,
+               "points": [[0, 0, 0], [0, 0, 1]], "elements": 3}],
+    "body": [{"name": "plate", "center": [0, 0, 1]}],
+    "binding": [{"body": "plate", "ends": [{"fiber": "beam", "node": "last"}]}],
+    "step": [{"body": [{"name": "plate", "rotation": [0, 0, 1.5]}]}],
+    "solver": {"binding_stiffness": 0}
+  })";
+  const Case c = parse_case_json(json, "plate.json");
+  ASSERT_EQ(c.bodies.size(), 1u);
+  EXPECT_EQ(c.bodies[0].axes, Mat3::Identity());
+  ASSERT_EQ(c.bindings.size(), 1u);
+  EXPECT_EQ(c.bindings[0].ends[0].kind, NodeRef::Kind::Last);
+  ASSERT_EQ(c.steps[0].bodies.size(), 1u);
+  EXPECT_FALSE(c.steps[0].bodies[0].has_displacement);
+  EXPECT_TRUE(c.steps[0].bodies[0].has_rotation);
+  EXPECT_EQ(c.steps[0].bodies[0].rotation, (std::array<std::optional<double>, 3>{0.0, 0.0, 1.5}));
+  EXPECT_DOUBLE_EQ(c.solver.binding_stiffness, 0.0);
+}
+
+class BadBodyInput : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(BadBodyInput, NamesFileKeyAndExpectation) {
+  const BadCase& c = GetParam();
+  const std::string text = replace_once(kBodies, c.from, c.to);
+  expect_toml_error(text, c.key, c.fragment);
+  if (c.json) expect_json_error(to_json(text), c.key, c.fragment);
+}
+
+const std::string kGripBinding = "[[binding]]\nbody = \"grip\"\nbodies = [\"towA\", \"towB\"]\n";
+
+const std::vector<BadCase> kBadBodyCases = {
+    // [[body]].
+    {"DuplicateBodyName", "name = \"towB\"\ncenter", "name = \"towA\"\ncenter", "body[2].name",
+     "duplicate body name \"towA\" (already used by body[1])"},
+    {"BodyNameEmpty", "name = \"towB\"\ncenter", "name = \"\"\ncenter", "body[2].name", "non-empty"},
+    {"BodyNameMissing", "name = \"towB\"\ncenter", "center", "body[2].name", "missing required key"},
+    {"BodyCenterMissing", "center = [1, 0.05, 0]\n", "", "body[1].center",
+     "missing required key (expected an array of 3 numbers [m])"},
+    {"BodyCenterLength", "center = [1, 0.05, 0]", "center = [1, 0.05]", "body[1].center",
+     "expected an array of 3 numbers, got an array of 2 elements"},
+    {"BodyCenterNotFinite", "center = [1, 0.05, 0]", "center = [1, inf, 0]", "body[1].center",
+     "(finite), element 1 is inf", false},
+    {"UnknownBodyKey", "center = [1, 0.05, 0]", "centre = [1, 0.05, 0]", "body[1].centre",
+     "unknown key \"centre\" (did you mean \"center\"?)"},
+    {"AxesNotOrthonormal", "axes = [[0, 1, 0], [-1, 0, 0], [0, 0, 1]]",
+     "axes = [[0, 1, 0], [-1, 0.1, 0], [0, 0, 1]]", "body[0].axes",
+     "expected orthonormal axes (rows D1, D2, D3), but D1.D2 = 0.1 instead of 0"},
+    {"AxesNotUnit", "axes = [[0, 1, 0], [-1, 0, 0], [0, 0, 1]]", "axes = [[0, 2, 0], [-1, 0, 0], [0, 0, 1]]",
+     "body[0].axes", "D1.D1 = 4 instead of 1"},
+    {"AxesLeftHanded", "axes = [[0, 1, 0], [-1, 0, 0], [0, 0, 1]]", "axes = [[0, 1, 0], [1, 0, 0], [0, 0, 1]]",
+     "body[0].axes", "expected right-handed axes (D3 = D1 x D2)"},
+    {"AxesTwoRows", "axes = [[0, 1, 0], [-1, 0, 0], [0, 0, 1]]", "axes = [[0, 1, 0], [-1, 0, 0]]", "body[0].axes",
+     "expected an array of 3 rows D1, D2, D3 (each an array of 3 numbers), got an array of 2 elements"},
+    {"AxesRowLength", "axes = [[0, 1, 0], [-1, 0, 0], [0, 0, 1]]", "axes = [[0, 1, 0], [-1, 0], [0, 0, 1]]",
+     "body[0].axes[1]", "expected an array of 3 numbers"},
+
+    // [[binding]].
+    {"BindingUnknownBody", "body = \"grip\"\nbodies", "body = \"gripp\"\nbodies", "binding[2].body",
+     "no body named \"gripp\" (did you mean \"grip\"?); defined bodies: grip, towA, towB"},
+    {"BindingBodyMissing", "body = \"grip\"\nbodies", "bodies", "binding[2].body",
+     "missing required key (expected a string naming a [[body]])"},
+    {"BindingUnknownKey", "bodies = [\"towA\", \"towB\"]", "bodis = [\"towA\", \"towB\"]", "binding[2].bodis",
+     "unknown key \"bodis\" (did you mean \"bodies\"?)"},
+    {"BindingUnknownMemberBody", "bodies = [\"towA\", \"towB\"]", "bodies = [\"towA\", \"towC\"]",
+     "binding[2].bodies[1]", "no body named \"towC\" (did you mean \"towA\"?)"},
+    {"BindingBodiesNotArray", "bodies = [\"towA\", \"towB\"]", "bodies = \"towA\"", "binding[2].bodies",
+     "expected an array of body names (strings), got a string"},
+    {"BindingMemberNotString", "bodies = [\"towA\", \"towB\"]", "bodies = [\"towA\", 2]", "binding[2].bodies[1]",
+     "expected a string, got an integer"},
+    {"BindingUnknownFiber", "{ fiber = \"f3\", node = 8 }", "{ fiber = \"f4\", node = 8 }",
+     "binding[1].ends[0].fiber", "no fiber named \"f4\""},
+    {"BindingEndUnknownKey", "{ fiber = \"f3\", node = 8 }", "{ fiber = \"f3\", nod = 8 }", "binding[1].ends[0].nod",
+     "unknown key \"nod\" (did you mean \"node\"?)"},
+    {"BindingEndNodeOutOfRange", "{ fiber = \"f3\", node = 8 }", "{ fiber = \"f3\", node = 9 }",
+     "binding[1].ends[0].node", "node index out of range"},
+    {"BindingEndsNotTables", "ends = [{ fiber = \"f3\", node = 8 }]", "ends = [\"f3\"]", "binding[1].ends[0]",
+     "expected a"},
+    {"BindingEmpty", "ends = [{ fiber = \"f3\", node = 8 }]", "ends = []", "binding[1]",
+     "a binding needs members: give `ends` and/or `bodies`"},
+    {"BindingNoMembers", "ends = [{ fiber = \"f3\", node = 8 }]\n", "", "binding[1]",
+     "a binding needs members: give `ends` and/or `bodies`"},
+    {"DuplicateEnd", "{ fiber = \"f2\", at = 1 }", "{ fiber = \"f1\", node = \"last\" }", "binding[0].ends[1]",
+     "duplicate end: node last of fiber \"f1\" is already binding[0].ends[0]"},
+    {"DuplicateEndByIndex", "{ fiber = \"f3\", node = 8 }",
+     "{ fiber = \"f3\", node = 8 }, { fiber = \"f3\", node = \"last\" }",
+     "binding[1].ends[1]", "duplicate end: node last of fiber \"f3\" is already binding[1].ends[0]"},
+    {"SelfBinding", "bodies = [\"towA\", \"towB\"]", "bodies = [\"towA\", \"grip\"]", "binding[2].bodies[1]",
+     "body \"grip\" cannot be bound to itself"},
+    {"BodyListedTwice", "bodies = [\"towA\", \"towB\"]", "bodies = [\"towA\", \"towA\"]", "binding[2].bodies[1]",
+     "body \"towA\" is listed twice in this binding (already binding[2].bodies[0])"},
+    {"BodyInTwoBindings", kGripBinding, kGripBinding + "\n[[binding]]\nbody = \"towB\"\nbodies = [\"towA\"]\n",
+     "binding[3].bodies[0]",
+     "body \"towA\" is a member of two bindings, binding[2] (to body \"grip\") and binding[3] (to body \"towB\")"},
+    {"TwoCycle", kGripBinding, kGripBinding + "\n[[binding]]\nbody = \"towA\"\nbodies = [\"grip\"]\n",
+     "binding[3].bodies", "bodies bound in a cycle: towA -> grip -> towA"},
+    {"ThreeCycle", kGripBinding,
+     "[[binding]]\nbody = \"grip\"\nbodies = [\"towA\"]\n\n[[binding]]\nbody = \"towA\"\nbodies = [\"towB\"]\n\n"
+     "[[binding]]\nbody = \"towB\"\nbodies = [\"grip\"]\n",
+     "binding[4].bodies", "bodies bound in a cycle: towB -> towA -> grip -> towB"},
+
+    // [[step.body]].
+    {"StepBodyUnknown", "name = \"towA\"\n  force", "name = \"towX\"\n  force", "step[0].body[1].name",
+     "no body named \"towX\" (did you mean \"towA\"?); defined bodies: grip, towA, towB"},
+    {"StepBodyNameMissing", "name = \"towA\"\n  force", "force", "step[0].body[1].name",
+     "missing required key (expected a string naming a [[body]])"},
+    {"StepBodyTwice", "name = \"towA\"\n  force", "name = \"grip\"\n  force", "step[0].body[1].name",
+     "body \"grip\" is listed twice in this step (already step[0].body[0])"},
+    {"StepBodyEmpty", "  force = [0, -3, 0]\n", "", "step[0].body[1]",
+     "nothing given for body \"towA\": expected at least one of displacement, rotation"},
+    {"StepBodyUnknownKey", "force = [0, -3, 0]", "forces = [0, -3, 0]", "step[0].body[1].forces",
+     "unknown key \"forces\" (did you mean \"force\"?)"},
+    {"ForceOnPrescribedComponent", "force = [0, 0, 10]", "force = [5, 0, 10]", "step[0].body[0].force",
+     "force x is 5 but displacement x is prescribed in the same entry"},
+    {"MomentOnPrescribedComponent", "moment = [1, 2, 0]", "moment = [1, 2, 3]", "step[0].body[0].moment",
+     "moment z is 3 but rotation z is prescribed in the same entry"},
+    {"BadFreeSpelling", "rotation = [\"free\", \"free\", 0.5]", "rotation = [\"fre\", \"free\", 0.5]",
+     "step[0].body[0].rotation",
+     "expected an array of 3 components, each a number or \"free\", element 0 is a string (\"fre\") (did you mean "
+     "\"free\"?)"},
+    {"DisplacementTwoComponents", "displacement = [0.01, 0, \"free\"]", "displacement = [0.01, 0]",
+     "step[0].body[0].displacement", "got an array of 2 elements"},
+    {"RotationNotFinite", "rotation = [\"free\", \"free\", 0.5]", "rotation = [\"free\", \"free\", nan]",
+     "step[0].body[0].rotation", "element 2 is nan", false},
+    {"BodyForceLength", "force = [0, -3, 0]", "force = [0, -3]", "step[0].body[1].force",
+     "expected an array of 3 numbers"},
+    {"StepBodyNotTables",
+     "name = \"release\"\n\n  [[step.body]]\n  name = \"grip\"\n  displacement = [\"free\", \"free\", \"free\"]",
+     "name = \"release\"\nbody = 3", "step[1].body", "expected an array of"},
+
+    // [solver].
+    {"BindingToleranceZero", "binding_tolerance = 1e-6", "binding_tolerance = 0", "solver.binding_tolerance",
+     "must be > 0"},
+    {"BindingToleranceString", "binding_tolerance = 1e-6", "binding_tolerance = \"small\"",
+     "solver.binding_tolerance", "expected a number, got a string"},
+    {"MaxBindingUpdatesZero", "max_binding_updates = 12", "max_binding_updates = 0", "solver.max_binding_updates",
+     "must be >= 1"},
+    {"MaxBindingUpdatesFloat", "max_binding_updates = 12", "max_binding_updates = 12.5",
+     "solver.max_binding_updates", "expected an integer"},
+    {"BindingStiffnessNegative", "binding_stiffness = 1e5", "binding_stiffness = -1", "solver.binding_stiffness",
+     "expected a number >= 0 (0 = automatic), got -1"},
+    {"BindingToleranceMisspelled", "binding_tolerance = 1e-6", "binding_tolerence = 1e-6",
+     "solver.binding_tolerence", "unknown key \"binding_tolerence\" (did you mean \"binding_tolerance\"?)"},
+};
+
+INSTANTIATE_TEST_SUITE_P(CaseReaderBodies, BadBodyInput, ::testing::ValuesIn(kBadBodyCases),
+                         [](const ::testing::TestParamInfo<BadCase>& param_info) {
+                           return std::string(param_info.param.name);
+                         });
+
+TEST(CaseReaderBodies, CycleOfThreeIsListedInOrder) {
+  // A bound to B, B bound to C, C bound to A: reported where the cycle closes.
+  const std::string text = kMinimal + R"(
+[[body]]
+name = "A"
+center = [0, 0, 0]
+[[body]]
+name = "B"
+center = [0, 0, 0]
+[[body]]
+name = "C"
+center = [0, 0, 0]
+[[binding]]
+body = "B"
+bodies = ["A"]
+[[binding]]
+body = "C"
+bodies = ["B"]
+[[binding]]
+body = "A"
+bodies = ["C"]
+)";
+  expect_toml_error(text, "binding[2].bodies", "bodies bound in a cycle: A -> B -> C -> A");
+  expect_json_error(to_json(text), "binding[2].bodies", "bodies bound in a cycle: A -> B -> C -> A");
+}
+
+TEST(CaseReaderBodies, BindingWithoutAnyBody) {
+  const std::string text = kMinimal + "[[binding]]\nbody = \"grip\"\nends = [{ fiber = \"beam\", node = \"last\" }]\n";
+  expect_toml_error(text, "binding[0].body", "no body named \"grip\": no [[body]] is defined");
+}
+
+TEST(CaseReaderBodies, BodyKeyAfterATableHeaderIsHinted) {
+  // `body` is a top-level key: written inside [[fix]] it gets the hint about table headers.
+  const std::string text = replace_once(kBase, "dofs = \"all\"", "dofs = \"all\"\nbody = \"grip\"");
+  expect_toml_error(text, "fix[0].body", "a top-level key must be written before the first [table] header");
 }
 
 }  // namespace

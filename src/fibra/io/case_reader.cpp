@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cerrno>
 #include <climits>
@@ -315,7 +316,8 @@ struct KeyHint {
 using Keys = std::vector<std::string_view>;
 
 /// The keys of the top level of a case file.
-const Keys kTopLevelKeys = {"title", "material", "fiber", "fix", "step", "solver", "contact", "output"};
+const Keys kTopLevelKeys = {
+    "title", "material", "fiber", "fix", "body", "binding", "step", "solver", "contact", "output"};
 
 // ------------------------------------------------------------------------------------------
 // Schema validation, written once for both formats.
@@ -507,6 +509,49 @@ class Reader {
     return x;
   }
 
+  /// An array of 3 components, each a number (prescribed) or "free" (std::nullopt).
+  std::array<std::optional<double>, 3> to_components(const Value& v, const std::string& key) const {
+    const std::string expected = "expected an array of 3 components, each a number or \"free\"";
+    if (v.type != Value::Type::Array || v.items.size() != 3) {
+      fail(key, fmt::format("{}, got {}", expected, describe(v)), &v);
+    }
+    std::array<std::optional<double>, 3> out;
+    for (std::size_t i = 0; i < 3; ++i) {
+      const Value& e = v.items[i];
+      if (e.type == Value::Type::String && e.text == "free") continue;
+      if (e.type == Value::Type::String) {
+        const Keys words = {"free"};
+        fail(key, fmt::format("{}, element {} is {}{}", expected, i, describe(e), did_you_mean(e.text, words)),
+             &v);
+      }
+      if (e.type != Value::Type::Integer && e.type != Value::Type::Float) {
+        fail(key, fmt::format("{}, element {} is {}", expected, i, describe(e)), &v);
+      }
+      const double x = e.type == Value::Type::Integer ? static_cast<double>(e.integer) : e.number;
+      if (!std::isfinite(x)) fail(key, fmt::format("{}, element {} is {}", expected, i, x), &v);
+      out[i] = x;
+    }
+    return out;
+  }
+
+  /// Checks that `name`, read from `v` at `key`, is the name of one of `bodies`.
+  void expect_body(const std::string& name, const Value& v, const std::string& key,
+                   const std::vector<BodySpec>& bodies) const {
+    std::vector<std::string> names;
+    for (const BodySpec& b : bodies) {
+      if (b.name == name) return;
+      names.push_back(b.name);
+    }
+    if (names.empty()) {
+      fail(key, fmt::format("no body named \"{}\": no {} is defined", name, m_json ? "body" : "[[body]]"),
+           &v);
+    }
+    fail(key,
+         fmt::format("no body named \"{}\"{}; defined bodies: {}", name, did_you_mean(name, names),
+                     list_names(names)),
+         &v);
+  }
+
   // -- sections ------------------------------------------------------------------------
 
   MaterialSpec read_material(const Value& t, const std::string& path) const;
@@ -517,8 +562,14 @@ class Reader {
                     const std::vector<FiberSpec>& fibers) const;
   FixSpec read_fix(const Value& t, const std::string& path,
                    const std::vector<FiberSpec>& fibers) const;
+  BodySpec read_body(const Value& t, const std::string& path) const;
+  BindingSpec read_binding(const Value& t, const std::string& path, std::size_t k,
+                           const std::vector<FiberSpec>& fibers, const std::vector<BodySpec>& bodies,
+                           const std::vector<BindingSpec>& earlier) const;
   StepSpec read_step(const Value& t, const std::string& path, std::size_t k,
-                     const std::vector<FiberSpec>& fibers) const;
+                     const std::vector<FiberSpec>& fibers, const std::vector<BodySpec>& bodies) const;
+  BodyStepSpec read_step_body(const Value& t, const std::string& path,
+                              const std::vector<BodySpec>& bodies) const;
   LoadSpec read_load(const Value& t, const std::string& path,
                      const std::vector<FiberSpec>& fibers) const;
   DisplacementSpec read_displacement(const Value& t, const std::string& path,
@@ -888,34 +939,215 @@ DisplacementSpec Reader::read_displacement(const Value& t, const std::string& pa
   DisplacementSpec d;
   d.node = read_node(t, path, fibers);
   const std::string key = join(path, "value");
-  const std::string expected = "expected an array of 3 components, each a number or \"free\"";
   const Value& v = require(t, path, "value", "an array of 3 components, each a number or \"free\"");
-  if (v.type != Value::Type::Array) fail(key, fmt::format("{}, got {}", expected, describe(v)), &v);
-  if (v.items.size() != 3) {
-    fail(key, fmt::format("{}, got {}", expected, describe(v)), &v);
-  }
-  bool any = false;
-  for (std::size_t i = 0; i < 3; ++i) {
-    const Value& e = v.items[i];
-    if (e.type == Value::Type::String && e.text == "free") {
-      d.value[i] = std::nullopt;
-      continue;
-    }
-    if (e.type != Value::Type::Integer && e.type != Value::Type::Float) {
-      fail(key, fmt::format("{}, element {} is {}", expected, i, describe(e)), &v);
-    }
-    const double x = e.type == Value::Type::Integer ? static_cast<double>(e.integer) : e.number;
-    if (!std::isfinite(x)) fail(key, fmt::format("{}, element {} is {}", expected, i, x), &v);
-    d.value[i] = x;
-    any = true;
-  }
+  d.value = to_components(v, key);
+  const bool any = std::any_of(d.value.begin(), d.value.end(), [](const auto& x) { return x.has_value(); });
   if (!any) fail(key, "all 3 components are \"free\": at least one must be a number", &v);
   return d;
 }
 
+BodySpec Reader::read_body(const Value& t, const std::string& path) const {
+  check_keys(t, path, {"name", "center", "axes"});
+  BodySpec b;
+  b.name = to_name(require(t, path, "name", "a string"), join(path, "name"));
+  b.center = to_vec3(require(t, path, "center", "an array of 3 numbers [m]"), join(path, "center"));
+  if (const Value* v = find(t, "axes")) {
+    const std::string key = join(path, "axes");
+    if (v->type != Value::Type::Array || v->items.size() != 3) {
+      fail(key,
+           fmt::format("expected an array of 3 rows D1, D2, D3 (each an array of 3 numbers), got {}",
+                       describe(*v)),
+           v);
+    }
+    for (std::size_t i = 0; i < 3; ++i) b.axes.col(static_cast<Index>(i)) = to_vec3(v->items[i], item(key, i));
+    // Orthonormal: D_i . D_j = delta_ij; right-handed: D1 x D2 = D3 (determinant +1).
+    constexpr double kTolerance = 1e-9;
+    for (int i = 0; i < 3; ++i) {
+      for (int j = i; j < 3; ++j) {
+        const double dot = b.axes.col(i).dot(b.axes.col(j));
+        const double expected = i == j ? 1.0 : 0.0;
+        if (!(std::abs(dot - expected) <= kTolerance)) {
+          fail(key,
+               fmt::format("expected orthonormal axes (rows D1, D2, D3), but D{}.D{} = {} instead of {} "
+                           "(tolerance {})",
+                           i + 1, j + 1, dot, expected, kTolerance),
+               v);
+        }
+      }
+    }
+    const double det = b.axes.col(0).cross(b.axes.col(1)).dot(b.axes.col(2));
+    if (!(det > 0)) {
+      fail(key,
+           fmt::format("expected right-handed axes (D3 = D1 x D2), but the rows are left-handed "
+                       "(D3 = -D1 x D2, determinant {})",
+                       det),
+           v);
+    }
+  }
+  return b;
+}
+
+BindingSpec Reader::read_binding(const Value& t, const std::string& path, std::size_t k,
+                                 const std::vector<FiberSpec>& fibers, const std::vector<BodySpec>& bodies,
+                                 const std::vector<BindingSpec>& earlier) const {
+  check_keys(t, path, {"body", "ends", "bodies"});
+  BindingSpec b;
+  b.line = static_cast<int>(k);
+  {
+    const std::string key = join(path, "body");
+    const Value& v = require(t, path, "body", "a string naming a [[body]]");
+    b.body = to_string(v, key);
+    expect_body(b.body, v, key, bodies);
+  }
+
+  if (const Value* v = find(t, "ends")) {
+    const std::string key = join(path, "ends");
+    const std::vector<Value>& ends = to_table_array(*v, key, "binding.ends");
+    // Node indices of the references that name a node directly (a fraction is compared as is).
+    const auto index_of = [&](const NodeRef& ref) -> Index {
+      const auto f =
+          std::find_if(fibers.begin(), fibers.end(), [&](const FiberSpec& x) { return x.name == ref.fiber; });
+      switch (ref.kind) {
+        case NodeRef::Kind::First: return 0;
+        case NodeRef::Kind::Last: return 2 * static_cast<Index>(f->elements);
+        case NodeRef::Kind::NodeIndex: return ref.index;
+        case NodeRef::Kind::Fraction: break;
+      }
+      return -1;
+    };
+    for (std::size_t i = 0; i < ends.size(); ++i) {
+      const std::string end_path = item(key, i);
+      check_keys(ends[i], end_path, {"fiber", "node", "at"});
+      NodeRef ref = read_node(ends[i], end_path, fibers);
+      for (std::size_t j = 0; j < b.ends.size(); ++j) {
+        const NodeRef& other = b.ends[j];
+        const bool fraction = ref.kind == NodeRef::Kind::Fraction;
+        if (other.fiber != ref.fiber || (other.kind == NodeRef::Kind::Fraction) != fraction) continue;
+        const bool same = fraction ? other.fraction == ref.fraction : index_of(other) == index_of(ref);
+        if (same) {
+          fail(end_path,
+               fmt::format("duplicate end: node {} of fiber \"{}\" is already {}", ref.label(),
+                           ref.fiber, item(key, j)),
+               &ends[i]);
+        }
+      }
+      b.ends.push_back(std::move(ref));
+    }
+  }
+
+  if (const Value* v = find(t, "bodies")) {
+    const std::string key = join(path, "bodies");
+    if (v->type != Value::Type::Array) {
+      fail(key, fmt::format("expected an array of body names (strings), got {}", describe(*v)), v);
+    }
+    // The body a body is bound to, by the earlier bindings and the members of this one read so far.
+    const auto parent_of = [&](const std::string& name) -> const std::string* {
+      for (const BindingSpec& e : earlier) {
+        if (std::find(e.bodies.begin(), e.bodies.end(), name) != e.bodies.end()) return &e.body;
+      }
+      if (std::find(b.bodies.begin(), b.bodies.end(), name) != b.bodies.end()) return &b.body;
+      return nullptr;
+    };
+    for (std::size_t i = 0; i < v->items.size(); ++i) {
+      const std::string member_key = item(key, i);
+      const Value& e = v->items[i];
+      const std::string name = to_string(e, member_key);
+      expect_body(name, e, member_key, bodies);
+      if (name == b.body) fail(member_key, fmt::format("body \"{}\" cannot be bound to itself", name), &e);
+      if (const auto it = std::find(b.bodies.begin(), b.bodies.end(), name); it != b.bodies.end()) {
+        fail(member_key,
+             fmt::format("body \"{}\" is listed twice in this binding (already {})", name,
+                         item(key, static_cast<std::size_t>(it - b.bodies.begin()))),
+             &e);
+      }
+      for (std::size_t j = 0; j < earlier.size(); ++j) {
+        if (std::find(earlier[j].bodies.begin(), earlier[j].bodies.end(), name) != earlier[j].bodies.end()) {
+          fail(member_key,
+               fmt::format("body \"{}\" is a member of two bindings, binding[{}] (to body \"{}\") and binding[{}] "
+                           "(to body \"{}\"): a body can be a member of at most one binding",
+                           name, j, earlier[j].body, k, b.body),
+               &e);
+        }
+      }
+      // Binding `name` to b.body closes a cycle when b.body is already bound, through a chain of
+      // bindings, to `name`.
+      std::vector<std::string> chain = {b.body};
+      for (const std::string* up = parent_of(b.body); up != nullptr && chain.size() <= bodies.size();
+           up = parent_of(*up)) {
+        chain.push_back(*up);
+        if (*up == name) {
+          chain.push_back(b.body);
+          std::string cycle;
+          for (const std::string& c : chain) cycle += (cycle.empty() ? "" : " -> ") + c;
+          fail(key, fmt::format("bodies bound in a cycle: {}", cycle), v);
+        }
+      }
+      b.bodies.push_back(name);
+    }
+  }
+
+  if (b.ends.empty() && b.bodies.empty()) {
+    fail(path, "a binding needs members: give `ends` and/or `bodies`", &t);
+  }
+  return b;
+}
+
+BodyStepSpec Reader::read_step_body(const Value& t, const std::string& path,
+                                    const std::vector<BodySpec>& bodies) const {
+  check_keys(t, path, {"name", "displacement", "rotation", "force", "moment"});
+  BodyStepSpec s;
+  {
+    const std::string key = join(path, "name");
+    const Value& v = require(t, path, "name", "a string naming a [[body]]");
+    s.name = to_string(v, key);
+    expect_body(s.name, v, key, bodies);
+  }
+  const Value* displacement = find(t, "displacement");
+  const Value* rotation = find(t, "rotation");
+  const Value* force = find(t, "force");
+  const Value* moment = find(t, "moment");
+  if (!displacement && !rotation && !force && !moment) {
+    fail(path,
+         fmt::format("nothing given for body \"{}\": expected at least one of displacement, rotation "
+                     "(arrays of 3 components, each a number or \"free\"), force or moment (arrays of 3 "
+                     "numbers)",
+                     s.name),
+         &t);
+  }
+  if (displacement) {
+    s.has_displacement = true;
+    s.displacement = to_components(*displacement, join(path, "displacement"));
+  }
+  if (rotation) {
+    s.has_rotation = true;
+    s.rotation = to_components(*rotation, join(path, "rotation"));
+  }
+  if (force) s.force = to_vec3(*force, join(path, "force"));
+  if (moment) s.moment = to_vec3(*moment, join(path, "moment"));
+
+  // A prescribed component takes no load: its reaction is computed.
+  const auto check_conflict = [&](const char* load_name, const Value* load_value, const std::optional<Vec3>& load,
+                                  const char* motion_name, const std::array<std::optional<double>, 3>& motion) {
+    if (!load) return;
+    static constexpr const char* kAxis[3] = {"x", "y", "z"};
+    for (int i = 0; i < 3; ++i) {
+      if ((*load)[i] != 0 && motion[i].has_value()) {
+        fail(join(path, load_name),
+             fmt::format("{} {} is {} but {} {} is prescribed in the same entry: a prescribed component "
+                         "takes no {} (give 0, or make {} {} \"free\")",
+                         load_name, kAxis[i], (*load)[i], motion_name, kAxis[i], load_name, motion_name, kAxis[i]),
+             load_value);
+      }
+    }
+  };
+  check_conflict("force", force, s.force, "displacement", s.displacement);
+  check_conflict("moment", moment, s.moment, "rotation", s.rotation);
+  return s;
+}
+
 StepSpec Reader::read_step(const Value& t, const std::string& path, std::size_t k,
-                           const std::vector<FiberSpec>& fibers) const {
-  check_keys(t, path, {"name", "increments", "max_increments", "load", "displacement"});
+                           const std::vector<FiberSpec>& fibers, const std::vector<BodySpec>& bodies) const {
+  check_keys(t, path, {"name", "increments", "max_increments", "load", "displacement", "body"});
   StepSpec step;
   if (const Value* v = find(t, "name")) {
     step.name = to_name(*v, join(path, "name"));
@@ -947,6 +1179,22 @@ StepSpec Reader::read_step(const Value& t, const std::string& path, std::size_t 
       step.displacements.push_back(read_displacement(displacements[i], item(key, i), fibers));
     }
   }
+  if (const Value* v = find(t, "body")) {
+    const std::string key = join(path, "body");
+    const std::vector<Value>& entries = to_table_array(*v, key, "step.body");
+    for (std::size_t i = 0; i < entries.size(); ++i) {
+      const std::string entry_path = item(key, i);
+      BodyStepSpec b = read_step_body(entries[i], entry_path, bodies);
+      for (std::size_t j = 0; j < step.bodies.size(); ++j) {
+        if (step.bodies[j].name == b.name) {
+          fail(join(entry_path, "name"),
+               fmt::format("body \"{}\" is listed twice in this step (already {})", b.name, item(key, j)),
+               find(entries[i], "name"));
+        }
+      }
+      step.bodies.push_back(std::move(b));
+    }
+  }
   return step;
 }
 
@@ -954,7 +1202,8 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   expect_table(t, path);
   check_keys(t, path,
              {"residual_tolerance", "displacement_tolerance", "max_iterations", "max_cuts",
-              "line_search", "linear_solver", "ordering"});
+              "line_search", "linear_solver", "ordering", "binding_tolerance", "max_binding_updates",
+              "binding_stiffness"});
   SolverSpec s;
   if (const Value* v = find(t, "residual_tolerance")) {
     s.residual_tolerance = positive(*v, join(path, "residual_tolerance"));
@@ -987,6 +1236,19 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
            fmt::format("expected \"metis\", \"amd\" or \"auto\", got \"{}\"{}", s.ordering,
                        did_you_mean(s.ordering, words)),
            v);
+    }
+  }
+  if (const Value* v = find(t, "binding_tolerance")) {
+    s.binding_tolerance = positive(*v, join(path, "binding_tolerance"));
+  }
+  if (const Value* v = find(t, "max_binding_updates")) {
+    s.max_binding_updates = to_int(*v, join(path, "max_binding_updates"), 1);
+  }
+  if (const Value* v = find(t, "binding_stiffness")) {
+    const std::string key = join(path, "binding_stiffness");
+    s.binding_stiffness = to_number(*v, key);
+    if (!(s.binding_stiffness >= 0)) {
+      fail(key, fmt::format("expected a number >= 0 (0 = automatic), got {}", s.binding_stiffness), v);
     }
   }
   return s;
@@ -1091,6 +1353,31 @@ Case Reader::read(const Value& root) const {
     }
   }
 
+  // Rigid bodies (optional), before the bindings and steps that refer to them.
+  if (const Value* v = find(root, "body")) {
+    const std::vector<Value>& tables = to_table_array(*v, "body", "body");
+    for (std::size_t i = 0; i < tables.size(); ++i) {
+      const std::string path = item("body", i);
+      BodySpec b = read_body(tables[i], path);
+      for (std::size_t j = 0; j < c.bodies.size(); ++j) {
+        if (c.bodies[j].name == b.name) {
+          fail(join(path, "name"),
+               fmt::format("duplicate body name \"{}\" (already used by body[{}])", b.name, j),
+               find(tables[i], "name"));
+        }
+      }
+      c.bodies.push_back(std::move(b));
+    }
+  }
+
+  // Averaged bindings (optional).
+  if (const Value* v = find(root, "binding")) {
+    const std::vector<Value>& tables = to_table_array(*v, "binding", "binding");
+    for (std::size_t i = 0; i < tables.size(); ++i) {
+      c.bindings.push_back(read_binding(tables[i], item("binding", i), i, c.fibers, c.bodies, c.bindings));
+    }
+  }
+
   // Steps.
   {
     const Value& v = require(root, "", "step", table_array_word("step"));
@@ -1098,7 +1385,7 @@ Case Reader::read(const Value& root) const {
     if (tables.empty()) fail("step", "at least one step is required", &v);
     for (std::size_t i = 0; i < tables.size(); ++i) {
       const std::string path = item("step", i);
-      StepSpec s = read_step(tables[i], path, i, c.fibers);
+      StepSpec s = read_step(tables[i], path, i, c.fibers, c.bodies);
       for (std::size_t j = 0; j < c.steps.size(); ++j) {
         if (c.steps[j].name == s.name) {
           fail(join(path, "name"),

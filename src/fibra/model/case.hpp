@@ -89,6 +89,40 @@ struct DisplacementSpec {
   std::array<std::optional<double>, 3> value;
 };
 
+/// A rigid body ([[body]]): 6 dofs, the position of its centre and the orientation of its
+/// orthonormal frame (D1, D2, D3). Its motion comes from [[step.body]] entries and from the
+/// bindings that tie other nodes or bodies to it in average (METHOD §5).
+struct BodySpec {
+  std::string name;
+  Vec3 center = Vec3::Zero();    ///< initial centre R [m]
+  Mat3 axes = Mat3::Identity();  ///< initial frame: column i is D_i (orthonormal, right-handed)
+};
+
+/// An averaged binding ([[binding]]): the mean motion of its members (fiber nodes, usually
+/// ends, and/or other bodies' centres and frames) follows the body, each member free to move
+/// on its own.
+struct BindingSpec {
+  std::string body;                 ///< the body the members follow
+  std::vector<NodeRef> ends;        ///< bound fiber nodes
+  std::vector<std::string> bodies;  ///< bound bodies (hierarchy: a tow end to a fabric edge)
+  int line = 0;                     ///< index of the [[binding]] entry (for messages)
+};
+
+/// A [[step.body]] entry: what is prescribed or applied to a body during a step. A component
+/// given a number is prescribed (total value at the end of the step, ramped from where it
+/// was); "free" releases it; an array that is absent leaves every component as it was.
+struct BodyStepSpec {
+  std::string name;                                   ///< the body
+  bool has_displacement = false;                      ///< `displacement` given
+  std::array<std::optional<double>, 3> displacement;  ///< of the centre from its initial position [m]
+  bool has_rotation = false;                          ///< `rotation` given
+  /// Accumulated spatial rotation components about the global axes [rad] (the rotation angle
+  /// for a rotation about a fixed axis).
+  std::array<std::optional<double>, 3> rotation;
+  std::optional<Vec3> force;                          ///< force on the centre [N] (total at step end)
+  std::optional<Vec3> moment;                         ///< moment about the centre [N m]
+};
+
 /// A load step: loads and displacements ramp linearly over the step from where the previous
 /// step ended; an entry not listed again keeps its last value.
 struct StepSpec {
@@ -97,6 +131,7 @@ struct StepSpec {
   int max_increments = 0;  ///< 0 = 100 * increments
   std::vector<LoadSpec> loads;
   std::vector<DisplacementSpec> displacements;
+  std::vector<BodyStepSpec> bodies;  ///< [[step.body]] entries
 };
 
 /// Nonlinear solver settings ([solver] table).
@@ -108,6 +143,9 @@ struct SolverSpec {
   bool line_search = true;
   std::string linear_solver = "cholmod";  ///< "cholmod" or "eigen"
   std::string ordering = "metis";         ///< CHOLMOD fill-reducing ordering: "metis", "amd" or "auto"
+  double binding_tolerance = 1e-8;        ///< largest binding violation, relative to the model size
+  int max_binding_updates = 30;           ///< multiplier updates per increment (augmented Lagrangian)
+  double binding_stiffness = 0;           ///< penalty of the augmented Lagrangian [N/m]; 0 = automatic
 };
 
 /// Contact and friction settings ([contact] table); contact is off when the table is absent.
@@ -140,6 +178,8 @@ struct Case {
   std::vector<MaterialSpec> materials;
   std::vector<FiberSpec> fibers;
   std::vector<FixSpec> fixes;
+  std::vector<BodySpec> bodies;
+  std::vector<BindingSpec> bindings;
   std::vector<StepSpec> steps;
   SolverSpec solver;
   ContactSpec contact;

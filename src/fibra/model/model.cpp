@@ -1,6 +1,7 @@
 #include "fibra/model/model.hpp"
 
 #include <cmath>
+#include <stdexcept>
 #include <fmt/format.h>
 
 #include "fibra/core/error.hpp"
@@ -40,7 +41,33 @@ Index Model::node_index(const NodeRef& ref, const std::string& file, const std::
   return fib.first_node;
 }
 
+std::vector<int> Model::group_sizes() const {
+  std::vector<int> sizes(num_nodes(), kNodeDofs);
+  sizes.resize(num_groups(), 6);
+  return sizes;
+}
+
+int Model::body_index(const std::string& name) const {
+  for (size_t i = 0; i < bodies.size(); ++i)
+    if (bodies[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+int add_body(Model& model, const BodySpec& spec) {
+  Body b;
+  b.name = spec.name;
+  b.first_dof = model.reference.size();
+  b.center = spec.center;
+  b.axes = spec.axes;
+  model.reference.conservativeResize(b.first_dof + 6);
+  model.reference.segment<3>(b.first_dof) = spec.center;
+  model.reference.segment<3>(b.first_dof + 3).setZero();
+  model.bodies.push_back(b);
+  return static_cast<int>(model.bodies.size()) - 1;
+}
+
 int add_fiber(Model& model, const FiberSpec& spec, int material) {
+  if (!model.bodies.empty()) throw std::logic_error("add_fiber: fibers must be added before bodies");
   const Index n_el = spec.elements;
   const Index n_nodes = 2 * n_el + 1;
   Fiber fib;
@@ -71,6 +98,7 @@ int add_fiber(Model& model, const FiberSpec& spec, int material) {
   const std::vector<PathFrame> frames = sample_path(spec.path, static_cast<int>(n_nodes), spec.section_direction);
   const Index base = model.reference.size();
   model.reference.conservativeResize(base + kNodeDofs * n_nodes);
+  model.node_dofs = model.reference.size();
   for (Index k = 0; k < n_nodes; ++k) {
     model.reference.segment<3>(base + 9 * k) = frames[k].position;
     model.reference.segment<3>(base + 9 * k + 3) = frames[k].g1;
@@ -108,6 +136,7 @@ Model build_model(const Case& c) {
     hi = hi.cwiseMax(model.reference.segment<3>(9 * k));
   }
   model.length_scale = model.num_nodes() > 0 ? std::max((hi - lo).norm(), 1e-30) : 1.0;
+  for (const BodySpec& b : c.bodies) add_body(model, b);
   return model;
 }
 

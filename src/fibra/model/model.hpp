@@ -23,19 +23,37 @@ struct Fiber {
   double length = 0;         ///< reference length [m]
 };
 
+/// A rigid body: 6 dofs after all the nodes' dofs, the centre R (3) then the incremental
+/// rotation vector theta (3) of its frame, D = exp([theta]x) D_ref (see body/bodies.hpp).
+struct Body {
+  std::string name;
+  Index first_dof = 0;            ///< global index of R_x
+  Vec3 center = Vec3::Zero();     ///< initial centre [m]
+  Mat3 axes = Mat3::Identity();   ///< initial frame, columns D1, D2, D3
+};
+
 /// The whole discretized model.
 struct Model {
   std::vector<MaterialSpec> materials;
   std::vector<Section> sections;
   std::vector<Fiber> fibers;
   std::vector<BeamElement> elements;
-  VecX reference;          ///< reference nodal values (9 per node)
+  std::vector<Body> bodies;
+  VecX reference;          ///< reference values: 9 per node, then 6 per body (R0, theta = 0)
+  Index node_dofs = 0;     ///< 9 * nodes: the bodies' dofs start here
   double length_scale = 1; ///< diagonal of the reference bounding box [m]
 
-  Index num_nodes() const { return reference.size() / kNodeDofs; }  ///< all nodes
-  Index num_dofs() const { return reference.size(); }               ///< 9 * nodes
+  Index num_nodes() const { return node_dofs / kNodeDofs; }  ///< all nodes
+  Index num_dofs() const { return reference.size(); }        ///< 9 * nodes + 6 * bodies
+  Index num_groups() const { return num_nodes() + static_cast<Index>(bodies.size()); }  ///< nodes, then bodies
+  /// Matrix group of body b (after the nodes).
+  Index body_group(Index b) const { return num_nodes() + b; }
+  /// Group sizes for the sparsity pattern: 9 per node, 6 per body.
+  std::vector<int> group_sizes() const;
   /// Index of a fiber by name, or -1.
   int fiber_index(const std::string& name) const;
+  /// Index of a body by name, or -1.
+  int body_index(const std::string& name) const;
   /// Global node index of a node reference; throws InputError (file, key) when invalid.
   Index node_index(const NodeRef& ref, const std::string& file, const std::string& key) const;
 };
@@ -43,7 +61,11 @@ struct Model {
 /// Meshes all fibers of a case.
 Model build_model(const Case& c);
 
-/// Appends a fiber (already validated spec) to a model; returns its index.
+/// Appends a fiber (already validated spec) to a model; returns its index. Fibers come
+/// before bodies (throws std::logic_error otherwise).
 int add_fiber(Model& model, const FiberSpec& spec, int material);
+
+/// Appends a rigid body; returns its index.
+int add_body(Model& model, const BodySpec& spec);
 
 }  // namespace fibra

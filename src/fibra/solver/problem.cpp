@@ -21,14 +21,22 @@ StencilSet beam_stencils(const Model& model) {
 
 }  // namespace
 
-Problem::Problem(const Model& model)
+Problem::Problem(const Model& model, BodySystem* bodies)
     : m_model(model),
+      m_bodies(bodies),
       m_beams(beam_stencils(model)),
-      m_pattern(std::vector<int>(model.num_nodes(), kNodeDofs), {&m_beams}),
+      m_pattern(model.group_sizes(), {}),
       m_fixed(model.num_dofs(), 0),
       m_forces(VecX::Zero(model.num_dofs())) {
-  m_diagonal.resize(model.num_dofs());
-  for (Index d = 0; d < model.num_dofs(); ++d) m_diagonal[d] = m_pattern.find(d, d);
+  build_pattern();
+}
+
+void Problem::build_pattern() {
+  std::vector<const StencilSet*> sets = {&m_beams, &m_contact_pairs};
+  if (m_bodies) sets.push_back(&m_bodies->stencils());
+  m_pattern = BlockPattern(m_model.group_sizes(), sets);
+  m_diagonal.resize(m_model.num_dofs());
+  for (Index d = 0; d < m_model.num_dofs(); ++d) m_diagonal[d] = m_pattern.find(d, d);
 }
 
 bool Problem::set_contacts(std::vector<ContactElement> contacts, const FrictionParams& friction) {
@@ -61,8 +69,7 @@ bool Problem::set_contacts(std::vector<ContactElement> contacts, const FrictionP
   if (changed) {
     pairs.colorize(m_model.num_nodes());
     m_contact_pairs = std::move(pairs);
-    m_pattern = BlockPattern(std::vector<int>(m_model.num_nodes(), kNodeDofs), {&m_beams, &m_contact_pairs});
-    for (Index d = 0; d < m_model.num_dofs(); ++d) m_diagonal[d] = m_pattern.find(d, d);
+    build_pattern();
   }
   return changed;
 }
@@ -81,9 +88,9 @@ double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hes
   const auto t0 = std::chrono::steady_clock::now();
   if (gradient) gradient->setZero(q.size());
   if (hessian) hessian->assign(m_pattern.nonzeros(), 0.0);
-  m_group_fixed.assign(m_model.num_nodes(), 0);
+  m_group_fixed.assign(m_model.num_groups(), 0);
   for (Index d = 0; d < q.size(); ++d)
-    if (m_fixed[d]) m_group_fixed[d / kNodeDofs] = 1;
+    if (m_fixed[d]) m_group_fixed[m_pattern.group_of_dof(d)] = 1;
   AssemblyTarget target{&m_pattern, &m_fixed, &m_group_fixed, gradient, hessian};
   const Model& model = m_model;
   double energy = assemble_set<ElemVec, ElemMat>(
@@ -112,7 +119,11 @@ double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hes
         });
   }
 
-  // Dead forces: potential -f . (q - q_ref).
+  // Averaged bindings of rigid bodies (augmented Lagrangian), sequential.
+  if (m_bodies) energy += m_bodies->evaluate(q, target, gradient != nullptr, hessian != nullptr);
+
+  // Dead forces: potential -f . (q - q_ref) (for a body's rotation dofs, the work of a moment
+  // over the increment's rotation vector).
   energy -= m_forces.dot(q - model.reference);
   if (gradient) *gradient -= m_forces;
   // Moments on section vectors (conservative about their axis; work from the energy base).

@@ -3,6 +3,7 @@
 /// gradient (f_int - f_ext) and Hessian, with eliminated (fixed or prescribed) dofs.
 #include <vector>
 
+#include "fibra/body/bodies.hpp"
 #include "fibra/contact/contact_element.hpp"
 #include "fibra/model/model.hpp"
 #include "fibra/solver/assembler.hpp"
@@ -25,8 +26,9 @@ struct AssemblyTimes {
 /// Energy terms of the model, assembled.
 class Problem {
  public:
-  /// Builds stencils, colouring and the sparsity pattern of `model` (kept by reference).
-  explicit Problem(const Model& model);
+  /// Builds stencils, colouring and the sparsity pattern of `model` (kept by reference) and
+  /// of the bindings of `bodies` (optional, kept by reference).
+  explicit Problem(const Model& model, BodySystem* bodies = nullptr);
 
   const Model& model() const { return m_model; }                 ///< the model
   const BlockPattern& pattern() const { return m_pattern; }      ///< matrix sparsity
@@ -35,6 +37,7 @@ class Problem {
   VecX& forces() { return m_forces; }                            ///< dead nodal forces (per dof) [N]
   std::vector<NodalMoment>& moments() { return m_moments; }      ///< nodal moments
   const AssemblyTimes& times() const { return m_times; }         ///< accumulated timings
+  BodySystem* bodies() const { return m_bodies; }                ///< rigid bodies and bindings (or null)
 
   /// Replaces the contact elements (each is oriented so that a.element < b.element) and the
   /// friction parameters; returns true when the matrix pattern changed (new element pairs),
@@ -53,7 +56,9 @@ class Problem {
   double evaluate(const VecX& q, VecX* gradient, std::vector<double>* hessian);
 
  private:
+  void build_pattern();
   const Model& m_model;
+  BodySystem* m_bodies = nullptr;
   StencilSet m_beams;
   StencilSet m_contact_pairs;            // one stencil per element pair in contact (6 nodes)
   std::vector<Index> m_pair_begin;       // contacts of pair s: [m_pair_begin[s], m_pair_begin[s+1])
@@ -61,7 +66,7 @@ class Problem {
   FrictionParams m_friction;
   BlockPattern m_pattern;
   std::vector<char> m_fixed;
-  std::vector<char> m_group_fixed;  // per node: some dof fixed (scatter fast path otherwise)
+  std::vector<char> m_group_fixed;  // per group (node or body): some dof fixed (scatter fast path otherwise)
   VecX m_forces;
   std::vector<NodalMoment> m_moments;
   std::vector<double> m_energy_buffer;

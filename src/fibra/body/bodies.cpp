@@ -1,0 +1,393 @@
+#include "fibra/body/bodies.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+
+#include "fibra/body/rotation.hpp"
+#include "fibra/core/error.hpp"
+
+namespace fibra {
+namespace {
+
+/// Gram–Schmidt on the columns (removes round-off drift of products of rotations).
+Mat3 orthonormalized(const Mat3& d) {
+  Mat3 r;
+  r.col(0) = d.col(0).normalized();
+  r.col(1) = (d.col(1) - d.col(1).dot(r.col(0)) * r.col(0)).normalized();
+  r.col(2) = r.col(0).cross(r.col(1));
+  return r;
+}
+
+}  // namespace
+
+BodySystem::BodySystem(const Case& c, const Model& model) : m_model(model) {
+  const Index nb = static_cast<Index>(model.bodies.size());
+  m_bodies.resize(nb);
+  for (Index b = 0; b < nb; ++b) m_bodies[b].frame_ref = model.bodies[b].axes;
+
+  // Stiffness scale of the model: the axial stiffness of the stiffest fiber's node spacing.
+  double k_ref = 0.0;
+  for (const Fiber& f : model.fibers) {
+    const double ea = model.materials[f.material].young * model.sections[f.section].area;
+    k_ref = std::max(k_ref, ea * 2.0 * static_cast<double>(f.num_elements) / f.length);
+  }
+  if (k_ref <= 0.0) k_ref = 1.0;
+
+  // Resolve members.
+  std::vector<std::vector<int>> parent_of(nb);  // bindings whose body is b
+  for (size_t i = 0; i < c.bindings.size(); ++i) {
+    const BindingSpec& spec = c.bindings[i];
+    const std::string key = fmt::format("binding[{}]", i);
+    Binding bd;
+    bd.body = model.body_index(spec.body);
+    if (bd.body < 0) throw InputError(c.file, key + ".body", fmt::format("no body named \"{}\"", spec.body));
+    for (size_t j = 0; j < spec.ends.size(); ++j) {
+      const Index node = model.node_index(spec.ends[j], c.file, fmt::format("{}.ends[{}]", key, j));
+      Member m;
+      m.group = node;
+      m.dof = kNodeDofs * node;
+      bd.members.push_back(m);
+    }
+    for (size_t j = 0; j < spec.bodies.size(); ++j) {
+      const int cb = model.body_index(spec.bodies[j]);
+      if (cb < 0)
+        throw InputError(c.file, fmt::format("{}.bodies[{}]", key, j), fmt::format("no body named \"{}\"", spec.bodies[j]));
+      if (cb == bd.body)
+        throw InputError(c.file, fmt::format("{}.bodies[{}]", key, j),
+                         fmt::format("body \"{}\" cannot be bound to itself", spec.bodies[j]));
+      Member m;
+      m.group = model.body_group(cb);
+      m.dof = model.bodies[cb].first_dof;
+      m.body = cb;
+      bd.members.push_back(m);
+    }
+    if (bd.members.empty())
+      throw InputError(c.file, key, "a binding needs members: give `ends` and/or `bodies`");
+    parent_of[bd.body].push_back(static_cast<int>(i));
+    m_bindings.push_back(std::move(bd));
+  }
+  for (Index b = 0; b < nb; ++b)
+    if (parent_of[b].empty())
+      throw InputError(c.file, fmt::format("body[{}]", b),
+                       fmt::format("body \"{}\" has no members: bind fiber nodes or bodies to it with a [[binding]] "
+                                   "whose body = \"{}\" (a body alone has nothing to move)",
+                                   model.bodies[b].name, model.bodies[b].name));
+
+  // Sizes and node counts, children first (depth-first; a cycle is an input error).
+  std::vector<int> visit(nb, 0);
+  std::vector<double> node_count(nb, 0.0);
+  std::function<void(Index)> size_of = [&](Index b) {
+    if (visit[b] == 2) return;
+    if (visit[b] == 1)
+      throw InputError(c.file, "binding", fmt::format("body \"{}\" is bound (through other bodies) to itself", model.bodies[b].name));
+    visit[b] = 1;
+    for (int i : parent_of[b]) {
+      Binding& bd = m_bindings[i];
+      const Body& body = model.bodies[b];
+      double count = 0.0;
+      for (Member& m : bd.members) {
+        if (m.body >= 0) {
+          size_of(m.body);
+          m.l2 = m_bodies[m.body].size * m_bodies[m.body].size;
+          count += node_count[m.body];
+        } else {
+          count += 1.0;
+        }
+        m.a = body.axes.transpose() * (model.reference.segment<3>(m.dof) - body.center);
+      }
+      const double n = static_cast<double>(bd.members.size());
+      bd.mean.setZero();
+      for (const Member& m : bd.members) bd.mean += m.a / n;
+      Mat3 inertia = Mat3::Zero();
+      double sum2 = 0.0;
+      bool has_body = false;
+      for (Member& m : bd.members) {
+        m.a -= bd.mean;
+        inertia += m.a.squaredNorm() * Mat3::Identity() - m.a * m.a.transpose() + 2.0 * m.l2 * Mat3::Identity();
+        sum2 += m.a.squaredNorm() + m.l2;
+        has_body = has_body || m.body >= 0;
+      }
+      const Eigen::SelfAdjointEigenSolver<Mat3> eig(inertia);
+      const double lmax = eig.eigenvalues().maxCoeff();
+      if (!(lmax > 0.0) || eig.eigenvalues().minCoeff() < 1e-6 * lmax) {
+        const std::string why = (bd.members.size() < 3 && !has_body) ? fmt::format("are only {}", bd.members.size())
+                                                                      : std::string("lie on one line");
+        throw InputError(c.file, fmt::format("binding[{}]", i),
+                         fmt::format("the members bound to body \"{}\" {}: they cannot define a mean rotation; bind at "
+                                     "least 3 fiber nodes that are not on one line (or bodies)",
+                                     body.name, why));
+      }
+      bd.s = std::sqrt(sum2 / n);
+      bd.k = c.solver.binding_stiffness > 0.0 ? c.solver.binding_stiffness : 100.0 * k_ref * count;
+      m_bodies[b].size = std::max(m_bodies[b].size, bd.s);
+      node_count[b] += count;
+    }
+    visit[b] = 2;
+  };
+  for (Index b = 0; b < nb; ++b) size_of(b);
+
+  // Stencils and local layout.
+  int largest = 0;
+  for (Binding& bd : m_bindings) {
+    std::vector<Index> groups;
+    int off = 0;
+    for (Member& m : bd.members) {
+      m.offset = off;
+      off += m.body >= 0 ? 6 : kNodeDofs;
+      groups.push_back(m.group);
+    }
+    bd.parent_offset = off;
+    bd.local_size = off + 6;
+    groups.push_back(model.body_group(bd.body));
+    m_stencils.add(groups);
+    largest = std::max(largest, bd.local_size);
+  }
+  m_stencils.colorize(model.num_groups());
+  m_g.setZero(largest);
+  m_h.setZero(largest, largest);
+}
+
+Vec6 BodySystem::spatial_conditions(const Binding& b, const VecX& q) const {
+  const Body& body = m_model.bodies[b.body];
+  const Mat3& dref = m_bodies[b.body].frame_ref;
+  const Vec3 r = q.segment<3>(body.first_dof);
+  const Mat3 e = rotation_exp(-q.segment<3>(body.first_dof + 3).eval());
+  const double n = static_cast<double>(b.members.size());
+  const double w = 1.0 / (n * b.s);
+  Vec3 pbar = Vec3::Zero(), grot = Vec3::Zero();
+  for (const Member& m : b.members) {
+    const Vec3 p = q.segment<3>(m.dof);
+    pbar += p / n;
+    grot += (dref * m.a).cross(e * (p - r));
+    if (m.body >= 0) {
+      const Body& child = m_model.bodies[m.body];
+      const Mat3 kc = m_bodies[m.body].frame_ref * child.axes.transpose() * body.axes * dref.transpose();
+      grot += m.l2 * vee_antisymmetric(e * rotation_exp(q.segment<3>(m.dof + 3).eval()) * kc);
+    }
+  }
+  Vec6 g;
+  g.head<3>() = e * (pbar - r) - dref * b.mean;
+  g.tail<3>() = w * grot;
+  return g;
+}
+
+Vec6 BodySystem::conditions(Index k, const VecX& q) const {
+  const Binding& b = m_bindings[k];
+  const Mat3& dref = m_bodies[b.body].frame_ref;
+  const Vec6 gs = spatial_conditions(b, q);
+  Vec6 g;
+  g.head<3>() = dref.transpose() * gs.head<3>();
+  g.tail<3>() = dref.transpose() * gs.tail<3>();
+  return g;
+}
+
+double BodySystem::violation(const VecX& q) const {
+  double v = 0.0;
+  for (const Binding& b : m_bindings) {
+    const Vec6 g = spatial_conditions(b, q);
+    v = std::max({v, g.head<3>().norm(), g.tail<3>().norm()});
+  }
+  return v;
+}
+
+void BodySystem::update_multipliers(const VecX& q) {
+  for (Binding& b : m_bindings) {
+    const Mat3& dref = m_bodies[b.body].frame_ref;
+    const Vec6 g = spatial_conditions(b, q);
+    b.lambda.head<3>() += b.k * (dref.transpose() * g.head<3>());
+    b.lambda.tail<3>() += b.k * (dref.transpose() * g.tail<3>());
+  }
+}
+
+std::vector<double> BodySystem::multipliers() const {
+  std::vector<double> out;
+  out.reserve(6 * m_bindings.size());
+  for (const Binding& b : m_bindings) out.insert(out.end(), b.lambda.data(), b.lambda.data() + 6);
+  return out;
+}
+
+void BodySystem::set_multipliers(const std::vector<double>& values) {
+  for (size_t k = 0; k < m_bindings.size(); ++k)
+    for (int i = 0; i < 6; ++i) m_bindings[k].lambda[i] = values.at(6 * k + i);
+}
+
+double BodySystem::binding_energy(const Binding& b, const VecX& q, VecX* grad, Eigen::MatrixXd* hess) const {
+  const Body& body = m_model.bodies[b.body];
+  const Mat3& dref = m_bodies[b.body].frame_ref;
+  const Index pd = body.first_dof;
+  const Vec3 r = q.segment<3>(pd);
+  const Vec3 theta = q.segment<3>(pd + 3);
+  Mat3 dR[3], d2R[9];
+  const bool derivatives = grad || hess;
+  const Mat3 e = rotation_exp(-theta, derivatives ? dR : nullptr, hess ? d2R : nullptr);
+  Mat3 de[3];
+  for (int j = 0; j < 3; ++j) de[j] = -dR[j];  // d/dtheta of R(-theta); second derivatives keep their sign
+  const double n = static_cast<double>(b.members.size());
+  const double w = 1.0 / (n * b.s);
+
+  // Conditions (spatial frame of the increment start).
+  Vec3 pbar = Vec3::Zero(), grot = Vec3::Zero(), qsum = Vec3::Zero();
+  for (const Member& m : b.members) pbar += q.segment<3>(m.dof) / n;
+  const Vec3 u = pbar - r;
+  for (const Member& m : b.members) {
+    const Vec3 qm = dref * m.a;
+    qsum += qm;
+    grot += qm.cross(e * (q.segment<3>(m.dof) - r));
+    if (m.body >= 0) {
+      const Body& child = m_model.bodies[m.body];
+      const Mat3 kc = m_bodies[m.body].frame_ref * child.axes.transpose() * body.axes * dref.transpose();
+      grot += m.l2 * vee_antisymmetric(e * rotation_exp(q.segment<3>(m.dof + 3).eval()) * kc);
+    }
+  }
+  Vec6 g;
+  g.head<3>() = e * u - dref * b.mean;
+  g.tail<3>() = w * grot;
+  Vec6 lam;
+  lam.head<3>() = dref * b.lambda.head<3>();
+  lam.tail<3>() = dref * b.lambda.tail<3>();
+  const double energy = lam.dot(g) + 0.5 * b.k * g.squaredNorm();
+  if (!derivatives) return energy;
+
+  const Vec6 mu = lam + b.k * g;
+  const Vec3 mu_p = mu.head<3>(), mu_r = mu.tail<3>();
+  const int ns = b.local_size;
+  const int po = b.parent_offset;
+  Eigen::Matrix<double, 6, Eigen::Dynamic> jac = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, ns);
+  // Members' positions.
+  for (const Member& m : b.members) {
+    jac.block<3, 3>(0, m.offset) = e / n;
+    jac.block<3, 3>(3, m.offset) = w * skew(dref * m.a) * e;
+  }
+  // Body centre.
+  jac.block<3, 3>(0, po) = -e;
+  jac.block<3, 3>(3, po) = -w * skew(qsum) * e;
+  // Body rotation, and bound bodies' rotations.
+  struct ChildTerms {
+    Mat3 rc, drc[3], d2rc[9], kc;
+  };
+  std::vector<ChildTerms> child(b.members.size());
+  for (size_t i = 0; i < b.members.size(); ++i) {
+    const Member& m = b.members[i];
+    if (m.body < 0) continue;
+    const Body& cb = m_model.bodies[m.body];
+    ChildTerms& t = child[i];
+    t.kc = m_bodies[m.body].frame_ref * cb.axes.transpose() * body.axes * dref.transpose();
+    t.rc = rotation_exp(q.segment<3>(m.dof + 3).eval(), t.drc, hess ? t.d2rc : nullptr);
+  }
+  for (int j = 0; j < 3; ++j) {
+    Vec3 rot = Vec3::Zero();
+    for (size_t i = 0; i < b.members.size(); ++i) {
+      const Member& m = b.members[i];
+      rot += (dref * m.a).cross(de[j] * (q.segment<3>(m.dof) - r));
+      if (m.body >= 0) {
+        const ChildTerms& t = child[i];
+        rot += m.l2 * vee_antisymmetric(de[j] * t.rc * t.kc);
+        for (int l = 0; l < 3; ++l)
+          jac.block<3, 1>(3, m.offset + 3 + l) = w * m.l2 * vee_antisymmetric(e * t.drc[l] * t.kc);
+      }
+    }
+    jac.block<3, 1>(0, po + 3 + j) = de[j] * u;
+    jac.block<3, 1>(3, po + 3 + j) = w * rot;
+  }
+  if (grad) grad->head(ns) = jac.transpose() * mu;
+  if (!hess) return energy;
+
+  auto h = hess->topLeftCorner(ns, ns);
+  h.noalias() = b.k * jac.transpose() * jac;
+  auto add_sym = [&](int row, int col, double v) {
+    h(row, col) += v;
+    if (row != col) h(col, row) += v;
+  };
+  // Second derivatives of mu . g.
+  for (int j = 0; j < 3; ++j) {
+    const int tj = po + 3 + j;
+    for (size_t i = 0; i < b.members.size(); ++i) {
+      const Member& m = b.members[i];
+      const Vec3 col = de[j].transpose() * (mu_p / n + w * mu_r.cross(dref * m.a));
+      for (int a = 0; a < 3; ++a) add_sym(m.offset + a, tj, col[a]);
+      if (m.body >= 0) {
+        const ChildTerms& t = child[i];
+        for (int l = 0; l < 3; ++l)
+          add_sym(tj, m.offset + 3 + l, w * m.l2 * mu_r.dot(vee_antisymmetric(de[j] * t.drc[l] * t.kc)));
+      }
+    }
+    const Vec3 colr = -de[j].transpose() * (mu_p + w * mu_r.cross(qsum));
+    for (int a = 0; a < 3; ++a) add_sym(po + a, tj, colr[a]);
+    for (int l = j; l < 3; ++l) {
+      const Mat3& d2 = d2R[3 * j + l];
+      double v = mu_p.dot(d2 * u);
+      for (size_t i = 0; i < b.members.size(); ++i) {
+        const Member& m = b.members[i];
+        v += w * mu_r.cross(dref * m.a).dot(d2 * (q.segment<3>(m.dof) - r));
+        if (m.body >= 0) v += w * m.l2 * mu_r.dot(vee_antisymmetric(d2 * child[i].rc * child[i].kc));
+      }
+      add_sym(tj, po + 3 + l, v);
+    }
+  }
+  for (size_t i = 0; i < b.members.size(); ++i) {
+    const Member& m = b.members[i];
+    if (m.body < 0) continue;
+    const ChildTerms& t = child[i];
+    for (int j = 0; j < 3; ++j)
+      for (int l = j; l < 3; ++l)
+        add_sym(m.offset + 3 + j, m.offset + 3 + l, w * m.l2 * mu_r.dot(vee_antisymmetric(e * t.d2rc[3 * j + l] * t.kc)));
+  }
+  return energy;
+}
+
+double BodySystem::evaluate(const VecX& q, const AssemblyTarget& target, bool want_gradient, bool want_hessian) {
+  double energy = 0.0;
+  for (Index k = 0; k < num_bindings(); ++k) {
+    const Binding& b = m_bindings[k];
+    const int ns = b.local_size;
+    energy += binding_energy(b, q, want_gradient ? &m_g : nullptr, want_hessian ? &m_h : nullptr);
+    const auto gv = m_g.head(ns);
+    const auto hv = m_h.topLeftCorner(ns, ns);
+    scatter_local(target, m_stencils.stencil(k), want_gradient ? &gv : nullptr, want_hessian ? &hv : nullptr);
+  }
+  return energy;
+}
+
+Mat3 BodySystem::frame(Index b, const VecX& q) const {
+  return rotation_exp(q.segment<3>(m_model.bodies[b].first_dof + 3).eval()) * m_bodies[b].frame_ref;
+}
+
+Vec3 BodySystem::rotation(Index b, const VecX& q) const {
+  return m_bodies[b].rotation + q.segment<3>(m_model.bodies[b].first_dof + 3);
+}
+
+BodyState BodySystem::state(Index b, const VecX& q) const {
+  BodyState s;
+  const Body& body = m_model.bodies[b];
+  s.center = q.segment<3>(body.first_dof);
+  s.frame = frame(b, q);
+  s.rotation = rotation(b, q);
+  VecX g;
+  Vec3 dtheta = Vec3::Zero();
+  for (const Binding& bd : m_bindings) {
+    if (bd.body != b) continue;
+    g.setZero(bd.local_size);
+    binding_energy(bd, q, &g, nullptr);
+    s.force += g.segment<3>(bd.parent_offset);
+    dtheta += g.segment<3>(bd.parent_offset + 3);
+  }
+  // dW/dtheta = T^T m.
+  s.moment = rotation_tangent(q.segment<3>(body.first_dof + 3).eval()).transpose().lu().solve(dtheta);
+  return s;
+}
+
+void BodySystem::commit(VecX& q) {
+  for (Index b = 0; b < num_bodies(); ++b) {
+    const Index d = m_model.bodies[b].first_dof + 3;
+    const Vec3 theta = q.segment<3>(d);
+    m_bodies[b].frame_ref = orthonormalized(rotation_exp(theta) * m_bodies[b].frame_ref);
+    m_bodies[b].rotation += theta;
+    q.segment<3>(d).setZero();
+  }
+}
+
+}  // namespace fibra

@@ -1,0 +1,119 @@
+#pragma once
+/// Rigid bodies and averaged binding conditions (METHOD §5; theory in docs/theory/bodies.md).
+///
+/// A body has 6 dofs after the nodes' dofs: its centre R and an incremental rotation vector
+/// theta, its frame being D = exp([theta]x) D_ref with D_ref the frame at the start of the
+/// increment (theta is folded into D_ref and reset to 0 when an increment is accepted, so
+/// any total rotation is reached without singularity).
+///
+/// A binding ties N members (fiber nodes by their centroid x0, or other bodies by their
+/// centre and frame) to a body in average, by six conditions g = 0 expressed in the body
+/// frame:
+///   position: g_pos = (1/N) sum_m D^T (p_m - R) - c          (c: the same mean at the start)
+///   rotation: g_rot = 1/(N s) [ sum_m a_m x D^T (p_m - R) + sum_c l_c^2 vee(P_c - P_c^T) ]
+/// where a_m are the members' initial positions in the body frame relative to their mean,
+/// s their rms distance to it, and P_c the rotation of a bound body relative to the binding
+/// body since the start. g_rot = 0 says the best-fit (least-squares) rotation of the group
+/// relative to the body is zero: every member keeps its freedom, only the mean motion is
+/// tied. The conditions are enforced by an augmented Lagrangian: energy
+/// lambda . g + k/2 |g|^2 per binding, exact gradient and Hessian, multipliers updated
+/// (lambda += k g) until |g| is below the tolerance.
+#include <string>
+#include <vector>
+
+#include "fibra/model/case.hpp"
+#include "fibra/model/model.hpp"
+#include "fibra/solver/assembler.hpp"
+#include "fibra/solver/block_pattern.hpp"
+
+namespace fibra {
+
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+
+/// What a body does at a state (for outputs and reactions).
+struct BodyState {
+  Vec3 center = Vec3::Zero();      ///< current centre [m]
+  Mat3 frame = Mat3::Identity();   ///< current frame, columns D1, D2, D3
+  Vec3 rotation = Vec3::Zero();    ///< accumulated rotation components [rad]
+  Vec3 force = Vec3::Zero();       ///< force the body applies to its members [N]
+  Vec3 moment = Vec3::Zero();      ///< moment it applies to them, about its centre [N m]
+};
+
+/// All rigid bodies and bindings of a model.
+class BodySystem {
+ public:
+  /// Resolves the [[binding]] entries of `c` against `model` (whose bodies come from
+  /// c.bodies) and checks that every body has members and every binding's members define a
+  /// mean rotation; throws InputError naming the entry otherwise.
+  BodySystem(const Case& c, const Model& model);
+
+  Index num_bodies() const { return static_cast<Index>(m_bodies.size()); }  ///< bodies
+  Index num_bindings() const { return static_cast<Index>(m_bindings.size()); }  ///< bindings
+  /// One stencil per binding: the members' groups, then the body's group.
+  const StencilSet& stencils() const { return m_stencils; }
+  /// Characteristic length of body b (rms radius of its members) [m], for rotation scaling.
+  double size(Index b) const { return m_bodies[b].size; }
+
+  /// Energy of all bindings at q; adds the gradient and Hessian (sequential, fixed order).
+  double evaluate(const VecX& q, const AssemblyTarget& target, bool want_gradient, bool want_hessian);
+  /// The six conditions of binding k at q, in the body frame (position then rotation) [m].
+  Vec6 conditions(Index k, const VecX& q) const;
+  /// Largest |g| over all conditions of all bindings [m].
+  double violation(const VecX& q) const;
+  /// Augmented Lagrangian update lambda += k g of every binding.
+  void update_multipliers(const VecX& q);
+  /// Multipliers of all bindings (6 per binding, body frame), to save and restore.
+  std::vector<double> multipliers() const;
+  void set_multipliers(const std::vector<double>& values);  ///< restores multipliers()
+  /// Penalty of binding k [N/m].
+  double stiffness(Index k) const { return m_bindings[k].k; }
+
+  /// Current frame of body b at q.
+  Mat3 frame(Index b, const VecX& q) const;
+  /// Accumulated rotation components of body b at q (committed increments + theta).
+  Vec3 rotation(Index b, const VecX& q) const;
+  /// Rotation components accumulated by the accepted increments.
+  Vec3 committed_rotation(Index b) const { return m_bodies[b].rotation; }
+  /// Force and moment body b applies to its members at q, and its position and frame.
+  BodyState state(Index b, const VecX& q) const;
+  /// Accepts the increment: every frame takes its rotation theta, theta is set to 0 in q.
+  void commit(VecX& q);
+
+ private:
+  struct Member {
+    Index group = 0;     ///< matrix group (node or body)
+    Index dof = 0;       ///< first global dof (x0 or R)
+    int body = -1;       ///< body index when the member is a body
+    int offset = 0;      ///< first local dof in the binding's stencil vector
+    Vec3 a = Vec3::Zero();  ///< initial position in the body frame, relative to the mean
+    double l2 = 0;       ///< bound body: squared rotational length (its own size)
+  };
+  struct Binding {
+    int body = 0;
+    std::vector<Member> members;
+    int parent_offset = 0;  ///< local offset of the body's R
+    int local_size = 0;
+    Vec3 mean = Vec3::Zero();  ///< initial mean position of the members in the body frame
+    double s = 0;              ///< rms radius of the members (with bound bodies' sizes)
+    double k = 0;              ///< penalty [N/m]
+    Vec6 lambda = Vec6::Zero();  ///< multipliers, body frame [N]
+  };
+  struct BodyData {
+    Mat3 frame_ref = Mat3::Identity();  ///< D_ref: frame at the start of the increment
+    Vec3 rotation = Vec3::Zero();       ///< accumulated rotation components
+    double size = 0;
+  };
+  /// Energy of binding k (local gradient and Hessian when given, sized local_size).
+  double binding_energy(const Binding& b, const VecX& q, VecX* g, Eigen::MatrixXd* h) const;
+  /// Conditions of binding b in the spatial frame of the start of the increment (D_ref g).
+  Vec6 spatial_conditions(const Binding& b, const VecX& q) const;
+
+  const Model& m_model;
+  std::vector<BodyData> m_bodies;
+  std::vector<Binding> m_bindings;
+  StencilSet m_stencils;
+  VecX m_g;                 // local buffers (sized to the largest binding)
+  Eigen::MatrixXd m_h;
+};
+
+}  // namespace fibra
