@@ -344,6 +344,156 @@ TEST_F(OutputWriterTest, VtuAndPvdRoundTrip) {
   for (double n : ref.get<double>("axial_force")) EXPECT_NEAR(n, 0.0, 1e-6);
 }
 
+/// Two rigid bodies: "clamp" with 3 members and a rotated frame, "free" without members.
+std::vector<BodyPoint> make_bodies(double scale = 1.0) {
+  BodyPoint a;
+  a.name = "clamp";
+  a.center = Vec3(1.0, 2.0, 3.0) * scale;
+  a.frame = Mat3::Identity();
+  a.displacement = Vec3(0.1, 0.2, 0.3) * scale;
+  a.rotation = Vec3(0.0, 0.0, 0.25) * scale;
+  a.force = Vec3(-5.0, 6.5, 0.125) * scale;
+  a.moment = Vec3(0.5, -0.25, 1.0) * scale;
+  a.members = {Vec3(1.5, 2.0, 3.0), Vec3(1.0, 2.5, 3.0), Vec3(1.0, 2.0, 3.5)};
+  BodyPoint b;
+  b.name = "free";
+  b.center = Vec3(-1.0, 0.0, 0.5);
+  b.frame.col(0) = Vec3(0.0, 1.0, 0.0);  // rotated by 90 degrees about z
+  b.frame.col(1) = Vec3(-1.0, 0.0, 0.0);
+  b.frame.col(2) = Vec3(0.0, 0.0, 1.0);
+  b.force = Vec3(1.0 / 3.0, 0.0, -2.0);
+  b.moment = Vec3(0.0, 7.0, 0.0);
+  return {a, b};
+}
+
+TEST_F(OutputWriterTest, BodiesVtuAndPvd) {
+  const Model model = make_model();
+  OutputWriter out(m_dir.string(), model, {}, 6);
+  const std::vector<BodyPoint> bodies = make_bodies();
+  // The reference state is written without bodies: no bodies files at all.
+  out.write_increment(model.reference, row(0, 0.0, {}), 0.0, true);
+  EXPECT_FALSE(fs::exists(m_dir / "bodies_000000.vtu"));
+  EXPECT_FALSE(fs::exists(m_dir / "bodies.pvd"));
+  // An empty list writes nothing either; an increment without vtu neither.
+  const std::vector<BodyPoint> none;
+  out.write_increment(model.reference, row(1, 0.25, {}), 0.25, false, nullptr, &bodies);
+  out.write_increment(model.reference, row(2, 0.5, {}), 0.5, true, nullptr, &none);
+  EXPECT_FALSE(fs::exists(m_dir / "bodies_000001.vtu"));
+  EXPECT_FALSE(fs::exists(m_dir / "bodies.pvd"));
+  EXPECT_EQ(out.vtu_count(), 2);
+
+  // Numbered like the fibers file of the same increment.
+  out.write_increment(deformed_state(model), row(3, 1.0, {}), 1.0, true, nullptr, &bodies);
+  ASSERT_TRUE(fs::exists(m_dir / "fibers_000002.vtu"));
+  ASSERT_TRUE(fs::exists(m_dir / "bodies_000002.vtu"));
+  auto entries = read_pvd(m_dir / "bodies.pvd");
+  ASSERT_EQ(entries.size(), 1u);
+  EXPECT_EQ(entries[0].first, 1.0);
+  EXPECT_EQ(entries[0].second, "bodies_000002.vtu");
+  EXPECT_EQ(read_pvd(m_dir / "fibers.pvd").size(), 3u);
+
+  const Vtu vtu = read_vtu(m_dir / "bodies_000002.vtu");
+  ASSERT_EQ(vtu.points, 2u + 3u);
+  ASSERT_EQ(vtu.cells, 2u + 3u);
+  EXPECT_EQ(vtu.get<double>("TimeValue").at(0), 1.0);
+
+  // Cells: vertices at the two centres, then a line from centre 0 to each member.
+  EXPECT_EQ(vtu.types.at("types"), "UInt8");
+  EXPECT_EQ(vtu.get<std::uint8_t>("types"), (std::vector<std::uint8_t>{1, 1, 3, 3, 3}));
+  EXPECT_EQ(vtu.get<std::int64_t>("offsets"), (std::vector<std::int64_t>{1, 2, 4, 6, 8}));
+  EXPECT_EQ(vtu.get<std::int64_t>("connectivity"), (std::vector<std::int64_t>{0, 1, 0, 2, 0, 3, 0, 4}));
+  EXPECT_EQ(vtu.types.at("kind"), "Int32");
+  EXPECT_EQ(vtu.get<std::int32_t>("kind"), (std::vector<std::int32_t>{0, 0, 1, 1, 1}));
+  const std::string text = read_text(m_dir / "bodies_000002.vtu");
+  const size_t cell_data = text.find("<CellData");
+  ASSERT_NE(cell_data, std::string::npos);
+  EXPECT_LT(text.find("</PointData>"), cell_data);
+  EXPECT_LT(cell_data, text.find("Name=\"kind\""));
+  EXPECT_LT(text.find("Name=\"kind\""), text.find("</CellData>"));
+  EXPECT_LT(text.find("</CellData>"), text.find("<Points>"));
+
+  // Points: centres, then the members of body 0.
+  const auto pts = vtu.get<double>("Points");
+  ASSERT_EQ(pts.size(), 3 * vtu.points);
+  const std::vector<Vec3> expected_pts = {bodies[0].center, bodies[1].center, bodies[0].members[0],
+                                          bodies[0].members[1], bodies[0].members[2]};
+  for (size_t p = 0; p < expected_pts.size(); ++p)
+    for (int d = 0; d < 3; ++d) EXPECT_EQ(pts[3 * p + d], expected_pts[p][d]) << "point " << p;
+
+  // Point data: every point carries the values of its body.
+  EXPECT_EQ(vtu.get<std::int32_t>("body"), (std::vector<std::int32_t>{0, 1, 0, 0, 0}));
+  const std::vector<size_t> owner = {0, 1, 0, 0, 0};
+  for (const std::string name : {"D1", "D2", "D3", "displacement", "rotation", "force", "moment"}) {
+    EXPECT_EQ(vtu.types.at(name), "Float64") << name;
+    EXPECT_EQ(vtu.components.at(name), 3) << name;
+    EXPECT_EQ(vtu.get<double>(name).size(), 3 * vtu.points) << name;
+  }
+  const auto d1 = vtu.get<double>("D1");
+  const auto d2 = vtu.get<double>("D2");
+  const auto force = vtu.get<double>("force");
+  const auto moment = vtu.get<double>("moment");
+  const auto disp = vtu.get<double>("displacement");
+  const auto rot = vtu.get<double>("rotation");
+  EXPECT_EQ(d1[3 * 1 + 0], 0.0);  // D1 of body 1
+  EXPECT_EQ(d1[3 * 1 + 1], 1.0);
+  EXPECT_EQ(d1[3 * 1 + 2], 0.0);
+  EXPECT_EQ(d2[3 * 1 + 0], -1.0);
+  for (size_t p = 0; p < owner.size(); ++p) {
+    const BodyPoint& b = bodies[owner[p]];
+    for (int d = 0; d < 3; ++d) {
+      EXPECT_EQ(d1[3 * p + d], b.frame(d, 0)) << "point " << p;
+      EXPECT_EQ(force[3 * p + d], b.force[d]) << "point " << p;
+      EXPECT_EQ(moment[3 * p + d], b.moment[d]) << "point " << p;
+      EXPECT_EQ(disp[3 * p + d], b.displacement[d]) << "point " << p;
+      EXPECT_EQ(rot[3 * p + d], b.rotation[d]) << "point " << p;
+    }
+  }
+  EXPECT_EQ(force[3 * 1 + 0], 1.0 / 3.0);  // full precision
+  EXPECT_EQ(force[3 * 0 + 1], 6.5);
+
+  // A second increment with bodies adds a second DataSet.
+  out.write_increment(deformed_state(model, 2.0), row(4, 1.0, {}), 2.0, true, nullptr, &bodies);
+  entries = read_pvd(m_dir / "bodies.pvd");
+  ASSERT_EQ(entries.size(), 2u);
+  EXPECT_EQ(entries[1].first, 2.0);
+  EXPECT_EQ(entries[1].second, "bodies_000003.vtu");
+  for (const auto& e : entries) EXPECT_TRUE(fs::exists(m_dir / e.second)) << e.second;
+  for (const auto& entry : fs::directory_iterator(m_dir))
+    EXPECT_NE(entry.path().extension(), ".tmp") << entry.path();
+
+  // A new writer in the same directory removes the bodies files of this run.
+  OutputWriter again(m_dir.string(), model, {}, 6);
+  EXPECT_FALSE(fs::exists(m_dir / "bodies.pvd"));
+  EXPECT_FALSE(fs::exists(m_dir / "bodies_000002.vtu"));
+}
+
+TEST_F(OutputWriterTest, WithoutBodiesNoBodiesFiles) {
+  const Model model = make_model();
+  OutputWriter out(m_dir.string(), model, {}, 6);
+  out.write_increment(model.reference, row(0, 0.0, {}), 0.0, true);
+  out.write_increment(deformed_state(model), row(1, 1.0, {}), 1.0, true);
+  EXPECT_TRUE(fs::exists(m_dir / "fibers_000001.vtu"));
+  for (const auto& entry : fs::directory_iterator(m_dir))
+    EXPECT_EQ(entry.path().filename().string().rfind("bodies", 0), std::string::npos) << entry.path();
+}
+
+TEST_F(OutputWriterTest, ContactsPvdListsOnlyWrittenFiles) {
+  const Model model = make_model();
+  OutputWriter out(m_dir.string(), model, {}, 6);
+  // The reference state is written without contacts (as the run does).
+  out.write_increment(model.reference, row(0, 0.0, {}), 0.0, true);
+  std::vector<ContactPoint> contacts(1);
+  contacts[0].normal_force = 2.5;
+  out.write_increment(deformed_state(model), row(1, 1.0, {}), 1.0, true, &contacts);
+  EXPECT_FALSE(fs::exists(m_dir / "contacts_000000.vtu"));
+  const auto entries = read_pvd(m_dir / "contacts.pvd");
+  ASSERT_EQ(entries.size(), 1u);
+  EXPECT_EQ(entries[0].second, "contacts_000001.vtu");
+  const Vtu vtu = read_vtu(m_dir / entries[0].second);
+  EXPECT_EQ(vtu.points, 1u);
+  EXPECT_EQ(vtu.get<double>("normal_force").at(0), 2.5);
+}
+
 TEST_F(OutputWriterTest, SummaryJsonParses) {
   const Model model = make_model();
   OutputWriter out(m_dir.string(), model, {}, 12);

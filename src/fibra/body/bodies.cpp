@@ -36,6 +36,10 @@ BodySystem::BodySystem(const Case& c, const Model& model) : m_model(model) {
     k_ref = std::max(k_ref, ea * 2.0 * static_cast<double>(f.num_elements) / f.length);
   }
   if (k_ref <= 0.0) k_ref = 1.0;
+  // Proximal spring: small enough to leave the solution unbiased (its force at convergence is
+  // below mu * tolerance) and the convergence of genuine modes untouched, large enough that a
+  // member's undetermined rigid motion has pivots far above round-off.
+  m_mu = 1e-10 * k_ref;
 
   // Resolve members.
   std::vector<std::vector<int>> parent_of(nb);  // bindings whose body is b
@@ -50,6 +54,10 @@ BodySystem::BodySystem(const Case& c, const Model& model) : m_model(model) {
       Member m;
       m.group = node;
       m.dof = kNodeDofs * node;
+      for (const Fiber& f : model.fibers)
+        if (node >= f.first_node && node < f.first_node + f.num_nodes)
+          m.r2 = model.sections[f.section].a * model.sections[f.section].b;
+      m.anchor = model.reference.segment<9>(m.dof);
       bd.members.push_back(m);
     }
     for (size_t j = 0; j < spec.bodies.size(); ++j) {
@@ -203,6 +211,24 @@ void BodySystem::update_multipliers(const VecX& q) {
   }
 }
 
+void BodySystem::set_anchors(const VecX& q) {
+  for (Binding& b : m_bindings)
+    for (Member& m : b.members)
+      if (m.body < 0) m.anchor = q.segment<9>(m.dof);
+}
+
+double BodySystem::anchor_drift(const VecX& q) const {
+  double drift = 0.0;
+  for (const Binding& b : m_bindings)
+    for (const Member& m : b.members) {
+      if (m.body >= 0) continue;
+      const double r = std::sqrt(m.r2);
+      drift = std::max(drift, (q.segment<3>(m.dof) - m.anchor.head<3>()).cwiseAbs().maxCoeff());
+      drift = std::max(drift, r * (q.segment<6>(m.dof + 3) - m.anchor.tail<6>()).cwiseAbs().maxCoeff());
+    }
+  return drift;
+}
+
 std::vector<double> BodySystem::multipliers() const {
   std::vector<double> out;
   out.reserve(6 * m_bindings.size());
@@ -249,7 +275,15 @@ double BodySystem::binding_energy(const Binding& b, const VecX& q, VecX* grad, E
   Vec6 lam;
   lam.head<3>() = dref * b.lambda.head<3>();
   lam.tail<3>() = dref * b.lambda.tail<3>();
-  const double energy = lam.dot(g) + 0.5 * b.k * g.squaredNorm();
+  double energy = lam.dot(g) + 0.5 * b.k * g.squaredNorm();
+  // Proximal springs of the bound nodes (their Hessian is diagonal, added below).
+  for (const Member& m : b.members) {
+    if (m.body >= 0) continue;
+    for (int d = 0; d < 9; ++d) {
+      const double w = d < 3 ? m_mu : m_mu * m.r2;
+      energy += 0.5 * w * (q[m.dof + d] - m.anchor[d]) * (q[m.dof + d] - m.anchor[d]);
+    }
+  }
   if (!derivatives) return energy;
 
   const Vec6 mu = lam + b.k * g;
@@ -293,11 +327,19 @@ double BodySystem::binding_energy(const Binding& b, const VecX& q, VecX* grad, E
     jac.block<3, 1>(0, po + 3 + j) = de[j] * u;
     jac.block<3, 1>(3, po + 3 + j) = w * rot;
   }
-  if (grad) grad->head(ns) = jac.transpose() * mu;
+  if (grad) {
+    grad->head(ns) = jac.transpose() * mu;
+    for (const Member& m : b.members)
+      if (m.body < 0)
+        for (int d = 0; d < 9; ++d) (*grad)[m.offset + d] += (d < 3 ? m_mu : m_mu * m.r2) * (q[m.dof + d] - m.anchor[d]);
+  }
   if (!hess) return energy;
 
   auto h = hess->topLeftCorner(ns, ns);
   h.noalias() = b.k * jac.transpose() * jac;
+  for (const Member& m : b.members)
+    if (m.body < 0)
+      for (int d = 0; d < 9; ++d) h(m.offset + d, m.offset + d) += d < 3 ? m_mu : m_mu * m.r2;
   auto add_sym = [&](int row, int col, double v) {
     h(row, col) += v;
     if (row != col) h(col, row) += v;
@@ -378,6 +420,14 @@ BodyState BodySystem::state(Index b, const VecX& q) const {
   // dW/dtheta = T^T m.
   s.moment = rotation_tangent(q.segment<3>(body.first_dof + 3).eval()).transpose().lu().solve(dtheta);
   return s;
+}
+
+std::vector<Vec3> BodySystem::member_positions(Index b, const VecX& q) const {
+  std::vector<Vec3> out;
+  for (const Binding& bd : m_bindings)
+    if (bd.body == b)
+      for (const Member& m : bd.members) out.push_back(q.segment<3>(m.dof));
+  return out;
 }
 
 void BodySystem::commit(VecX& q) {

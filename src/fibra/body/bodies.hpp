@@ -62,6 +62,18 @@ class BodySystem {
   double violation(const VecX& q) const;
   /// Augmented Lagrangian update lambda += k g of every binding.
   void update_multipliers(const VecX& q);
+  /// Proximal stabilization: each bound fiber node is tied to an anchor (its values when the
+  /// anchors were last set) by a spring of stiffness mu (mu r^2 on the section vectors). The
+  /// averaged conditions leave a member's own rigid motions to contact and the fibers; where
+  /// nothing holds them yet (a loose strand, a core inside a rope before it is pressed) the
+  /// tangent is singular. The spring removes that singularity; the anchors follow the
+  /// solution (set_anchors after every solve), so the spring's force vanishes at convergence:
+  /// the loop ends when no member moved more than the tolerance since its anchor.
+  void set_anchors(const VecX& q);
+  /// Largest distance of a bound node from its anchor (section vectors scaled by r) [m].
+  double anchor_drift(const VecX& q) const;
+  /// Stiffness of the proximal spring [N/m].
+  double proximal_stiffness() const { return m_mu; }
   /// Multipliers of all bindings (6 per binding, body frame), to save and restore.
   std::vector<double> multipliers() const;
   void set_multipliers(const std::vector<double>& values);  ///< restores multipliers()
@@ -76,6 +88,8 @@ class BodySystem {
   Vec3 committed_rotation(Index b) const { return m_bodies[b].rotation; }
   /// Force and moment body b applies to its members at q, and its position and frame.
   BodyState state(Index b, const VecX& q) const;
+  /// Current positions of the members bound to body b (fiber nodes' x0, bodies' centres).
+  std::vector<Vec3> member_positions(Index b, const VecX& q) const;
   /// Accepts the increment: every frame takes its rotation theta, theta is set to 0 in q.
   void commit(VecX& q);
 
@@ -87,6 +101,8 @@ class BodySystem {
     int offset = 0;      ///< first local dof in the binding's stencil vector
     Vec3 a = Vec3::Zero();  ///< initial position in the body frame, relative to the mean
     double l2 = 0;       ///< bound body: squared rotational length (its own size)
+    double r2 = 0;       ///< fiber node: squared section radius (scales its section vectors)
+    Eigen::Matrix<double, 9, 1> anchor = Eigen::Matrix<double, 9, 1>::Zero();  ///< proximal anchor (nodes)
   };
   struct Binding {
     int body = 0;
@@ -112,6 +128,7 @@ class BodySystem {
   std::vector<BodyData> m_bodies;
   std::vector<Binding> m_bindings;
   StencilSet m_stencils;
+  double m_mu = 0;          // proximal stiffness
   VecX m_g;                 // local buffers (sized to the largest binding)
   Eigen::MatrixXd m_h;
 };

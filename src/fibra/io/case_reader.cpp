@@ -710,15 +710,13 @@ PathSpec Reader::read_path(const Value& t, const std::string& path) const {
     check_keys(table, base, {"center", "axis", "radius", "start_angle", "angle"});
   } else {
     p.kind = PathSpec::Kind::Helix;
-    check_keys(table, base, {"center", "axis", "radius", "pitch", "turns"});
+    check_keys(table, base, {"center", "axis", "radius", "pitch", "turns", "start_angle"});
   }
   if (const Value* v = find(table, "center")) p.center = to_vec3(*v, join(base, "center"));
   if (const Value* v = find(table, "axis")) p.axis = to_direction(*v, join(base, "axis"));
   p.radius = positive(require(table, base, "radius", "a number > 0 [m]"), join(base, "radius"));
+  if (const Value* v = find(table, "start_angle")) p.start_angle = to_number(*v, join(base, "start_angle")) * kDegree;
   if (is_arc) {
-    if (const Value* v = find(table, "start_angle")) {
-      p.start_angle = to_number(*v, join(base, "start_angle")) * kDegree;
-    }
     const std::string angle_key = join(base, "angle");
     const Value& angle = require(table, base, "angle", "a nonzero number of degrees");
     const double degrees = to_number(angle, angle_key);
@@ -1203,7 +1201,7 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   check_keys(t, path,
              {"residual_tolerance", "displacement_tolerance", "max_iterations", "max_cuts",
               "line_search", "linear_solver", "ordering", "binding_tolerance", "max_binding_updates",
-              "binding_stiffness"});
+              "binding_stiffness", "max_step"});
   SolverSpec s;
   if (const Value* v = find(t, "residual_tolerance")) {
     s.residual_tolerance = positive(*v, join(path, "residual_tolerance"));
@@ -1250,6 +1248,11 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
     if (!(s.binding_stiffness >= 0)) {
       fail(key, fmt::format("expected a number >= 0 (0 = automatic), got {}", s.binding_stiffness), v);
     }
+  }
+  if (const Value* v = find(t, "max_step")) {
+    const std::string key = join(path, "max_step");
+    s.max_step = to_number(*v, key);
+    if (!(s.max_step >= 0)) fail(key, fmt::format("expected a length >= 0 [m] (0 = no limit), got {}", s.max_step), v);
   }
   return s;
 }

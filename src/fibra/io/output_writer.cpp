@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <fmt/format.h>
 #include <numbers>
 #include <regex>
@@ -178,9 +179,11 @@ struct VtuPiece {
 
 
 /// Writes one .vtu with the given point data, points and cells (appended raw binary).
+/// `cell_data` (optional) is written as CellData with `cell_scalars` as its active scalars.
 void write_vtu_arrays(const std::string& path, double time, size_t n_points, size_t n_cells,
                       const std::vector<VtuArray>& point_data, const std::vector<VtuArray>& points,
-                      const std::vector<VtuArray>& cells, std::string_view scalars, std::string_view vectors) {
+                      const std::vector<VtuArray>& cells, std::string_view scalars, std::string_view vectors,
+                      const std::vector<VtuArray>& cell_data = {}, std::string_view cell_scalars = {}) {
   const std::vector<double> time_value{time};
   std::vector<VtuArray> field = {vtu_array("TimeValue", "Float64", 1, time_value)};
   std::uint64_t offset = 0;
@@ -205,7 +208,13 @@ void write_vtu_arrays(const std::string& path, double time, size_t n_points, siz
   xml += fmt::format("    <Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", n_points, n_cells);
   xml += fmt::format("      <PointData Scalars=\"{}\" Vectors=\"{}\">\n", scalars, vectors);
   add(point_data, "        ", false);
-  xml += "      </PointData>\n      <Points>\n";
+  xml += "      </PointData>\n";
+  if (!cell_data.empty()) {
+    xml += fmt::format("      <CellData Scalars=\"{}\">\n", cell_scalars);
+    add(cell_data, "        ", false);
+    xml += "      </CellData>\n";
+  }
+  xml += "      <Points>\n";
   add(points, "        ", false);
   xml += "      </Points>\n      <Cells>\n";
   add(cells, "        ", false);
@@ -243,6 +252,8 @@ void write_vtu_file(const std::string& path, const VtuPiece& p, double time) {
 }
 
 
+constexpr std::uint8_t kVtkVertex = 1;
+constexpr std::uint8_t kVtkLine = 3;
 constexpr std::uint8_t kVtkPolyLine = 4;
 constexpr std::uint8_t kVtkQuad = 9;
 
@@ -264,8 +275,10 @@ OutputWriter::OutputWriter(std::string dir, const Model& model, std::vector<std:
 
   // Remove what a previous run in this directory left, so that no stale collection,
   // summary or numbered .vtu can be mistaken for output of this run.
-  static const std::regex numbered(R"((fibers|lines|contacts)_\d{6}\.vtu(\.tmp)?)");
-  for (const char* name : {"fibers.pvd", "lines.pvd", "contacts.pvd", "nodes.csv", "summary.json"}) fs::remove(path(name), ec);
+  static const std::regex numbered(R"((fibers|lines|contacts|bodies)_\d{6}\.vtu(\.tmp)?)");
+  for (const char* name :
+       {"fibers.pvd", "lines.pvd", "contacts.pvd", "bodies.pvd", "nodes.csv", "summary.json"})
+    fs::remove(path(name), ec);
   for (fs::directory_iterator it(m_dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string name = it->path().filename().string();
     if (std::regex_match(name, numbered)) {
@@ -297,17 +310,25 @@ void OutputWriter::check_state(const VecX& q) const {
 }
 
 void OutputWriter::write_increment(const VecX& q, const HistoryRow& row, double time, bool write_vtu_files,
-                                   const std::vector<ContactPoint>* contacts) {
+                                   const std::vector<ContactPoint>* contacts,
+                                   const std::vector<BodyPoint>* bodies) {
   check_state(q);
   write_history_row(row);
   if (!write_vtu_files) return;
   const int index = vtu_count();
+  const bool with_bodies = bodies && !bodies->empty();
   write_vtu(q, index, time);
   if (contacts) write_contacts(*contacts, index, time);
+  if (with_bodies) write_bodies(*bodies, index, time);
+  // Each collection lists only the files written for it, so an increment written without
+  // contacts or bodies (e.g. the reference state) leaves no dangling DataSet behind.
   m_vtu_files.emplace_back(time, index);
-  write_pvd("fibers.pvd", "fibers");
-  write_pvd("lines.pvd", "lines");
-  if (contacts) write_pvd("contacts.pvd", "contacts");
+  if (contacts) m_contact_files.emplace_back(time, index);
+  if (with_bodies) m_body_files.emplace_back(time, index);
+  write_pvd("fibers.pvd", "fibers", m_vtu_files);
+  write_pvd("lines.pvd", "lines", m_vtu_files);
+  if (contacts) write_pvd("contacts.pvd", "contacts", m_contact_files);
+  if (with_bodies) write_pvd("bodies.pvd", "bodies", m_body_files);
 }
 
 void OutputWriter::write_contacts(const std::vector<ContactPoint>& contacts, int index, double time) const {
@@ -339,6 +360,77 @@ void OutputWriter::write_contacts(const std::vector<ContactPoint>& contacts, int
                                  vtu_array("offsets", "Int64", 1, offsets), vtu_array("types", "UInt8", 1, types)};
   write_vtu_arrays(path(fmt::format("contacts_{:06d}.vtu", index)), time, n, n, point_data, pts, cells, "normal_force",
                    "normal");
+}
+
+void OutputWriter::write_bodies(const std::vector<BodyPoint>& bodies, int index, double time) const {
+  // Points: the body centres, then the members of body 0, body 1, ...
+  // Cells: one vertex per centre, then one line from each centre to each of its members.
+  const size_t n_bodies = bodies.size();
+  if (n_bodies > static_cast<size_t>(std::numeric_limits<std::int32_t>::max()))
+    throw RunError(fmt::format("output: too many bodies ({})", n_bodies));
+  size_t n_members = 0;
+  for (const BodyPoint& b : bodies) n_members += b.members.size();
+  const size_t n_points = n_bodies + n_members;
+  const size_t n_cells = n_bodies + n_members;
+
+  std::vector<double> points, d1, d2, d3, displacement, rotation, force, moment;
+  for (std::vector<double>* v : {&points, &d1, &d2, &d3, &displacement, &rotation, &force, &moment})
+    v->reserve(3 * n_points);
+  std::vector<std::int32_t> body;
+  body.reserve(n_points);
+  std::vector<std::int64_t> connectivity, offsets;
+  connectivity.reserve(n_bodies + 2 * n_members);
+  offsets.reserve(n_cells);
+  std::vector<std::uint8_t> types;
+  types.reserve(n_cells);
+  std::vector<std::int32_t> kind;
+  kind.reserve(n_cells);
+
+  auto add_point = [&](const Vec3& x, const BodyPoint& b, size_t k) {
+    push3(points, x);
+    push3(d1, b.frame.col(0));
+    push3(d2, b.frame.col(1));
+    push3(d3, b.frame.col(2));
+    push3(displacement, b.displacement);
+    push3(rotation, b.rotation);
+    push3(force, b.force);
+    push3(moment, b.moment);
+    body.push_back(static_cast<std::int32_t>(k));
+  };
+  for (size_t k = 0; k < n_bodies; ++k) {
+    add_point(bodies[k].center, bodies[k], k);
+    connectivity.push_back(static_cast<std::int64_t>(k));
+    offsets.push_back(static_cast<std::int64_t>(connectivity.size()));
+    types.push_back(kVtkVertex);
+    kind.push_back(0);
+  }
+  for (size_t k = 0; k < n_bodies; ++k) {
+    for (const Vec3& x : bodies[k].members) {
+      const auto member = static_cast<std::int64_t>(body.size());
+      add_point(x, bodies[k], k);
+      connectivity.insert(connectivity.end(), {static_cast<std::int64_t>(k), member});
+      offsets.push_back(static_cast<std::int64_t>(connectivity.size()));
+      types.push_back(kVtkLine);
+      kind.push_back(1);
+    }
+  }
+
+  std::vector<VtuArray> point_data = {
+      vtu_array("body", "Int32", 1, body),
+      vtu_array("D1", "Float64", 3, d1),
+      vtu_array("D2", "Float64", 3, d2),
+      vtu_array("D3", "Float64", 3, d3),
+      vtu_array("displacement", "Float64", 3, displacement),
+      vtu_array("rotation", "Float64", 3, rotation),
+      vtu_array("force", "Float64", 3, force),
+      vtu_array("moment", "Float64", 3, moment),
+  };
+  std::vector<VtuArray> pts = {vtu_array("Points", "Float64", 3, points)};
+  std::vector<VtuArray> cells = {vtu_array("connectivity", "Int64", 1, connectivity),
+                                 vtu_array("offsets", "Int64", 1, offsets), vtu_array("types", "UInt8", 1, types)};
+  std::vector<VtuArray> cell_data = {vtu_array("kind", "Int32", 1, kind)};
+  write_vtu_arrays(path(fmt::format("bodies_{:06d}.vtu", index)), time, n_points, n_cells, point_data, pts, cells,
+                   "body", "force", cell_data, "kind");
 }
 
 void OutputWriter::write_history_row(const HistoryRow& row) {
@@ -450,12 +542,12 @@ void OutputWriter::write_vtu(const VecX& q, int index, double time) const {
   write_vtu_file(path(fmt::format("lines_{:06d}.vtu", index)), lines, time);
 }
 
-void OutputWriter::write_pvd(const std::string& name, const std::string& prefix) const {
+void OutputWriter::write_pvd(const std::string& name, const std::string& prefix, const PvdEntries& entries) const {
   std::string xml = "<?xml version=\"1.0\"?>\n";
   xml += fmt::format("<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"{}\">\n",
                      std::endian::native == std::endian::little ? "LittleEndian" : "BigEndian");
   xml += "  <Collection>\n";
-  for (const auto& [time, index] : m_vtu_files)
+  for (const auto& [time, index] : entries)
     xml += fmt::format("    <DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{}_{:06d}.vtu\"/>\n", time, prefix,
                        index);
   xml += "  </Collection>\n</VTKFile>\n";

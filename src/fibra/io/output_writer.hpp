@@ -1,7 +1,8 @@
 #pragma once
 /// Run output: history.csv (one row per converged increment), nodes.csv, ParaView
 /// collections of tube surfaces and centroid lines (fibers.pvd / lines.pvd with one .vtu per
-/// written increment) and summary.json. Every write is checked; files that are rewritten
+/// written increment), of contact elements (contacts.pvd) and of rigid bodies (bodies.pvd),
+/// and summary.json. Every write is checked; files that are rewritten
 /// (pvd, nodes.csv, summary.json) are replaced atomically. File formats: docs/outputs.md.
 #include <cstdio>
 #include <memory>
@@ -39,6 +40,18 @@ struct ContactPoint {
   int zone = 0;                  ///< proximity zone
 };
 
+/// A rigid body for the ParaView output and history.
+struct BodyPoint {
+  std::string name;
+  Vec3 center = Vec3::Zero();      ///< current centre [m]
+  Mat3 frame = Mat3::Identity();   ///< columns D1, D2, D3
+  Vec3 displacement = Vec3::Zero();///< centre displacement from the initial position [m]
+  Vec3 rotation = Vec3::Zero();    ///< accumulated rotation components [rad]
+  Vec3 force = Vec3::Zero();       ///< force the body applies to its members [N]
+  Vec3 moment = Vec3::Zero();      ///< moment about its centre [N m]
+  std::vector<Vec3> members;       ///< current positions of its bound members (nodes or body centres)
+};
+
 /// Writes all output files of a run into one directory.
 class OutputWriter {
  public:
@@ -50,8 +63,10 @@ class OutputWriter {
   OutputWriter& operator=(const OutputWriter&) = delete;  ///< not copyable (owns a file)
 
   /// Appends a history row (flushed to disk at once) and, if write_vtu, writes fibers_NNNNNN.vtu and lines_NNNNNN.vtu and rewrites fibers.pvd / lines.pvd (timestep = load counter `time`) so the collections are valid after every increment.
+  /// With write_vtu it also writes contacts_NNNNNN.vtu and rewrites contacts.pvd when `contacts` is non-null (even if empty), and writes bodies_NNNNNN.vtu and rewrites bodies.pvd when `bodies` is non-null and non-empty (same NNNNNN as fibers_NNNNNN.vtu). Each collection lists only the files actually written.
   void write_increment(const VecX& q, const HistoryRow& row, double time, bool write_vtu,
-                       const std::vector<ContactPoint>* contacts = nullptr);
+                       const std::vector<ContactPoint>* contacts = nullptr,
+                       const std::vector<BodyPoint>* bodies = nullptr);
   /// Writes nodes.csv for state q: columns fiber,node,x,y,z,g1x,g1y,g1z,g2x,g2y,g2z (fiber name, node index local to the fiber), full double precision.
   void write_nodes(const VecX& q) const;
   /// Writes summary.json (pretty-printed, atomically: write tmp then rename).
@@ -68,8 +83,10 @@ class OutputWriter {
   std::string path(const std::string& name) const;
   void write_history_row(const HistoryRow& row);
   void write_vtu(const VecX& q, int index, double time) const;
-  void write_pvd(const std::string& name, const std::string& prefix) const;
+  using PvdEntries = std::vector<std::pair<double, int>>;  ///< (time, file index) of each .vtu of a collection
+  void write_pvd(const std::string& name, const std::string& prefix, const PvdEntries& entries) const;
   void write_contacts(const std::vector<ContactPoint>& contacts, int index, double time) const;
+  void write_bodies(const std::vector<BodyPoint>& bodies, int index, double time) const;
   void check_state(const VecX& q) const;
 
   std::string m_dir;
@@ -77,7 +94,9 @@ class OutputWriter {
   std::vector<std::string> m_extra_columns;
   int m_tube_sides = 12;
   std::unique_ptr<std::FILE, FileCloser> m_history;
-  std::vector<std::pair<double, int>> m_vtu_files;  ///< (time, file index) of each written .vtu
+  PvdEntries m_vtu_files;      ///< (time, file index) of each written fibers/lines .vtu pair
+  PvdEntries m_contact_files;  ///< (time, file index) of each written contacts .vtu
+  PvdEntries m_body_files;     ///< (time, file index) of each written bodies .vtu
 };
 
 }  // namespace fibra

@@ -143,6 +143,7 @@ struct SolverSpec {
   bool line_search = true;
   std::string linear_solver = "cholmod";  ///< "cholmod" or "eigen"
   std::string ordering = "metis";         ///< CHOLMOD fill-reducing ordering: "metis", "amd" or "auto"
+  double max_step = -1;                   ///< largest motion per Newton iteration [m]; < 0 = automatic (half the smallest radius with contact, none without), 0 = none
   double binding_tolerance = 1e-8;        ///< largest binding violation, relative to the model size
   int max_binding_updates = 30;           ///< multiplier updates per increment (augmented Lagrangian)
   double binding_stiffness = 0;           ///< penalty of the augmented Lagrangian [N/m]; 0 = automatic

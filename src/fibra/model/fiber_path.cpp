@@ -65,8 +65,9 @@ void path_point(const PathSpec& p, double s, Vec3& x, Vec3& t) {
       plane_basis(p.axis, u, v);
       const double c = helix_rise(p);
       const double speed = std::hypot(p.radius, c);
-      const double phi = s / speed;
-      x = p.center + p.radius * (std::cos(phi) * u + std::sin(phi) * v) + c * phi * p.axis;
+      const double turn = s / speed;  // angle turned from the start
+      const double phi = p.start_angle + turn;
+      x = p.center + p.radius * (std::cos(phi) * u + std::sin(phi) * v) + c * turn * p.axis;
       t = (p.radius * (-std::sin(phi) * u + std::cos(phi) * v) + c * p.axis) / speed;
       return;
     }

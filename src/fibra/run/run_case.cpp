@@ -22,6 +22,8 @@ RunReport run_case(const Case& c, const RunOptions& options) {
       "contact:detections",  "contact:normal_updates", "contact:penalty_raises",    "contact:detection_time",
       "contact:solve_time"};
   if (solver.has_contact()) columns.insert(columns.end(), contact_columns.begin(), contact_columns.end());
+  const BodySystem* bodies = solver.bodies();
+  if (bodies) columns.insert(columns.end(), {"binding:updates", "binding:max_violation"});
   OutputWriter writer(options.out_dir, model, columns, c.output.tube_sides);
   double time_output = 0.0;
   auto observer = [&](const IncrementInfo& info, const VecX& q) {
@@ -35,7 +37,15 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                         double(cs.detections), double(cs.normal_updates), double(cs.penalty_raises), cs.detection_time,
                         info.increment_time - cs.detection_time});
     }
+    if (bodies) row.extra.insert(row.extra.end(), {double(info.binding_updates), info.binding_violation});
     const bool vtu = info.step_end || info.total_increments % c.output.every == 0;
+    std::vector<BodyPoint> body_points;
+    if (vtu && bodies)
+      for (Index b = 0; b < bodies->num_bodies(); ++b) {
+        const BodyState& bs = info.bodies[b];
+        body_points.push_back({model.bodies[b].name, bs.center, bs.frame, bs.center - model.bodies[b].center,
+                               bs.rotation, bs.force, bs.moment, bodies->member_positions(b, q)});
+      }
     std::vector<ContactPoint> points;
     if (vtu && solver.has_contact()) {
       const auto& contacts = solver.problem().contacts();
@@ -49,13 +59,20 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                           responses[k].slip, ce.zone});
       }
     }
-    writer.write_increment(q, row, info.step_index + info.load_factor, vtu, solver.has_contact() ? &points : nullptr);
+    writer.write_increment(q, row, info.step_index + info.load_factor, vtu, solver.has_contact() ? &points : nullptr,
+                           bodies ? &body_points : nullptr);
     time_output += std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
   };
   // Initial (reference) state as increment 0 in the ParaView collection.
+  std::vector<BodyPoint> initial_bodies;
+  if (bodies)
+    for (Index b = 0; b < bodies->num_bodies(); ++b)
+      initial_bodies.push_back({model.bodies[b].name, model.bodies[b].center, model.bodies[b].axes, Vec3::Zero(),
+                                Vec3::Zero(), Vec3::Zero(), Vec3::Zero(),
+                                bodies->member_positions(b, model.reference)});
   writer.write_increment(model.reference, HistoryRow{"initial", -1, 0, 0.0, 0, 0.0, 0.0,
                                                      std::vector<double>(columns.size(), 0.0)},
-                         0.0, true);
+                         0.0, true, nullptr, bodies ? &initial_bodies : nullptr);
   RunReport report;
   report.result = solver.run(observer);
   report.stats = solver.stats();
@@ -80,7 +97,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                        {"attempted_load_factor", report.result.attempted_load_factor},
                        {"residual_history", report.result.residual_history}};
   j["counts"] = {{"fibers", report.fibers}, {"nodes", report.nodes}, {"dofs", report.dofs},
-                 {"elements", report.elements}};
+                 {"elements", report.elements}, {"bodies", model.bodies.size()}, {"bindings", c.bindings.size()}};
   j["timings"] = {{"total", report.wall_time}, {"assembly", s.time_assembly},
                   {"factorization", s.time_factorization}, {"solve", s.time_solve}, {"output", time_output}};
   j["solver"] = {{"linear_solver", c.solver.linear_solver},
@@ -93,6 +110,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                  {"regularized_factorizations", s.regularized_factorizations},
                  {"line_search_trials", s.line_search_trials},
                  {"roundoff_convergences", s.roundoff_convergences},
+                 {"binding_updates", s.binding_updates},
                  {"factor_nonzeros", s.factor_nonzeros}};
   writer.write_summary(j);
   return report;

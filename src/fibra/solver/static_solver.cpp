@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <fmt/format.h>
 #include <map>
 
@@ -39,7 +40,9 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }  // namespace
 
 StaticSolver::StaticSolver(const Case& c, const Model& model)
-    : m_case(c), m_model(model), m_problem(std::make_unique<Problem>(model)),
+    : m_case(c), m_model(model),
+      m_bodies(model.bodies.empty() ? nullptr : std::make_unique<BodySystem>(c, model)),
+      m_problem(std::make_unique<Problem>(model, m_bodies.get())),
       m_linear(make_linear_solver(c.solver.linear_solver, c.solver.ordering)), m_program(std::make_unique<Program>()),
       m_q(model.reference) {
   const Index n = model.num_dofs();
@@ -69,8 +72,45 @@ StaticSolver::StaticSolver(const Case& c, const Model& model)
       add_reaction(ref, model.node_index(ref, c.file, fmt::format("step[{}].displacement[{}]", s, i)));
     }
   }
+  // Rigid bodies: history columns, and no force on a component that is prescribed.
+  if (m_bodies) {
+    for (const Body& b : model.bodies)
+      for (const char* col : {"fx", "fy", "fz", "mx", "my", "mz", "ux", "uy", "uz", "rx", "ry", "rz"})
+        m_reaction_columns.push_back(fmt::format("body:{}:{}", b.name, col));
+    std::vector<std::string> held(model.num_dofs());  // step name that prescribes the dof, or ""
+    for (size_t s = 0; s < c.steps.size(); ++s)
+      for (size_t i = 0; i < c.steps[s].bodies.size(); ++i) {
+        const BodyStepSpec& bs = c.steps[s].bodies[i];
+        const std::string key = fmt::format("step[{}].body[{}]", s, i);
+        const int b = model.body_index(bs.name);
+        if (b < 0) throw InputError(c.file, key + ".name", fmt::format("no body named \"{}\"", bs.name));
+        const Index d0 = model.bodies[b].first_dof;
+        for (int k = 0; k < 3; ++k) {
+          if (bs.has_displacement) held[d0 + k] = bs.displacement[k] ? c.steps[s].name : "";
+          if (bs.has_rotation) held[d0 + 3 + k] = bs.rotation[k] ? c.steps[s].name : "";
+        }
+        const char* axis[3] = {"x", "y", "z"};
+        for (int k = 0; k < 3; ++k) {
+          if (bs.force && (*bs.force)[k] != 0.0 && !held[d0 + k].empty())
+            throw InputError(c.file, key + ".force",
+                             fmt::format("a force along {} on body \"{}\", whose displacement along {} is prescribed "
+                                         "(since step \"{}\"): release it with \"free\" or drop the force",
+                                         axis[k], bs.name, axis[k], held[d0 + k]));
+          if (bs.moment && (*bs.moment)[k] != 0.0 && !held[d0 + 3 + k].empty())
+            throw InputError(c.file, key + ".moment",
+                             fmt::format("a moment about {} on body \"{}\", whose rotation about {} is prescribed "
+                                         "(since step \"{}\"): release it with \"free\" or drop the moment",
+                                         axis[k], bs.name, axis[k], held[d0 + 3 + k]));
+        }
+      }
+  }
   m_force_scale = VecX::Ones(n);
   m_length_scale = VecX::Ones(n);
+  for (Index b = 0; m_bodies && b < m_bodies->num_bodies(); ++b)
+    for (int k = 3; k < 6; ++k) {
+      m_force_scale[model.bodies[b].first_dof + k] = 1.0 / m_bodies->size(b);
+      m_length_scale[model.bodies[b].first_dof + k] = m_bodies->size(b);
+    }
   for (const Fiber& f : model.fibers) {
     const Section& sec = model.sections[f.section];
     const double r = std::sqrt(sec.a * sec.b);
@@ -80,7 +120,15 @@ StaticSolver::StaticSolver(const Case& c, const Model& model)
         m_length_scale[9 * (f.first_node + k) + d] = r;
       }
   }
-  if (c.contact.enabled) m_contact = std::make_unique<ContactManager>(model, c.contact);
+  if (c.contact.enabled) {
+    m_contact = std::make_unique<ContactManager>(model, c.contact);
+    double rmin = std::numeric_limits<double>::infinity();
+    for (const Fiber& f : model.fibers)
+      rmin = std::min(rmin, std::sqrt(model.sections[f.section].a * model.sections[f.section].b));
+    m_max_step = c.solver.max_step >= 0.0 ? c.solver.max_step : 0.5 * rmin;
+  } else {
+    m_max_step = std::max(0.0, c.solver.max_step);
+  }
   m_q_start = m_q;
   m_linear->analyze(m_problem->pattern());
 }
@@ -100,6 +148,11 @@ void StaticSolver::apply(int step, double lambda) {
   for (const auto& [dof, se] : p.disp) {
     fixed[dof] = 1;
     m_q[dof] = m_model.reference[dof] + se.first + lambda * (se.second - se.first);
+    // A body's rotation dofs hold the increment's rotation: total minus what is committed.
+    if (dof >= m_model.node_dofs && (dof - m_model.node_dofs) % 6 >= 3) {
+      const Index b = (dof - m_model.node_dofs) / 6;
+      m_q[dof] -= m_bodies->committed_rotation(b)[(dof - m_model.node_dofs) % 6 - 3];
+    }
   }
 }
 
@@ -115,7 +168,8 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
                                    double& residual) {
   apply(step, lambda);
   m_contact_stats = ContactStats{};
-  if (!m_contact) return newton(history, iterations, residual);
+  m_binding_updates = 0;
+  if (!m_contact) return equilibrium(history, iterations, residual);
 
   // METHOD §4: (1) contact elements, repeated while the set changes; (2) normals, repeated
   // while they turn; (3) Newton on the rest. A zone that penetrates too deep gets a stiffer
@@ -135,7 +189,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     bool normals_settled = false;
     for (int k = 0; k < spec.max_normal_updates; ++k) {
       int its = 0;
-      if (!newton(history, its, residual)) {
+      if (!equilibrium(history, its, residual)) {
         iterations = total_iterations + its;
         return false;
       }
@@ -182,6 +236,29 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     contacts = m_problem->contacts();
   }
   return false;
+}
+
+bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, double& residual) {
+  iterations = 0;
+  const double tolerance = m_case.solver.binding_tolerance * m_model.length_scale;
+  if (m_bodies) m_bodies->set_anchors(m_q);
+  for (int update = 0;; ++update) {
+    int its = 0;
+    const bool ok = newton(history, its, residual);
+    iterations += its;
+    if (!ok) return false;
+    if (!m_bodies) return true;
+    // Augmented Lagrangian: conditions within the tolerance; proximal anchors: no member moved
+    // more than the tolerance since they were set (their springs' force is then negligible).
+    const bool satisfied = m_bodies->violation(m_q) <= tolerance;
+    const bool settled = m_bodies->anchor_drift(m_q) <= tolerance;
+    if (satisfied && settled) return true;
+    if (update >= m_case.solver.max_binding_updates) return false;
+    if (!satisfied) m_bodies->update_multipliers(m_q);
+    m_bodies->set_anchors(m_q);
+    ++m_binding_updates;
+    ++m_stats.binding_updates;
+  }
 }
 
 bool StaticSolver::newton(std::vector<double>& history, int& iterations, double& residual) {
@@ -269,6 +346,20 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     m_problem->set_energy_base(m_q);
     const double s0 = dq.dot(r);
     double alpha = 1.0;
+    // With contact, no node moves more than a fraction of the smallest radius per iteration:
+    // a fiber that nothing holds yet (zero contact stiffness at first touch, a member free in
+    // its averaged binding) gets a huge linearized step that would jump through its
+    // neighbours; limited, it moves until contact stiffens it.
+    if (m_max_step > 0.0) {
+      double largest = 0.0;
+      for (Index d = 0; d < n; ++d) largest = std::max(largest, std::abs(dq[d]) * m_length_scale[d]);
+      if (largest > m_max_step) {
+        alpha = m_max_step / largest;
+        dq *= alpha;
+        alpha = 1.0;
+        ++m_stats.limited_steps;
+      }
+    }
     trial = m_q + dq;
     if (opt.line_search && stalled && s0 < 0.0) {
       const double e0 = m_problem->evaluate(m_q, nullptr, nullptr);
@@ -286,7 +377,15 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     m_problem->evaluate(trial, &m_gradient, &m_hessian);
     m_q = trial;
     last_step = 0.0;
-    for (Index d = 0; d < n; ++d) last_step = std::max(last_step, std::abs(alpha * dq[d]) * m_length_scale[d]);
+    Index worst = 0;
+    for (Index d = 0; d < n; ++d)
+      if (std::abs(alpha * dq[d]) * m_length_scale[d] > last_step) {
+        last_step = std::abs(alpha * dq[d]) * m_length_scale[d];
+        worst = d;
+      }
+    if (std::getenv("FIBRA_DEBUG_NEWTON"))
+      fmt::print(stderr, "  it {:2d} residual {:.3e} shift {:.2e} alpha {:.3f} step {:.3e} at dof {} (group {})\n", iterations,
+                 residual, shift, alpha, last_step, worst, m_problem->pattern().group_of_dof(worst));
   }
 }
 
@@ -334,6 +433,27 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         disp[dof] = {start, *ds.value[k]};
       }
     }
+    for (size_t i = 0; i < st.bodies.size(); ++i) {
+      const BodyStepSpec& bs = st.bodies[i];
+      const int b = m_model.body_index(bs.name);
+      const Index d0 = m_model.bodies[b].first_dof;
+      for (int k = 0; k < 3; ++k) {
+        if (bs.has_displacement) {
+          if (bs.displacement[k])
+            disp[d0 + k] = {m_q[d0 + k] - m_model.reference[d0 + k], *bs.displacement[k]};
+          else
+            disp.erase(d0 + k);
+        }
+        if (bs.has_rotation) {
+          if (bs.rotation[k])
+            disp[d0 + 3 + k] = {m_bodies->rotation(b, m_q)[k], *bs.rotation[k]};
+          else
+            disp.erase(d0 + 3 + k);
+        }
+      }
+      if (bs.force) p.force_end.segment<3>(d0) = *bs.force;
+      if (bs.moment) p.force_end.segment<3>(d0 + 3) = *bs.moment;
+    }
     p.disp = disp;
 
     const double nominal = 1.0 / st.increments;
@@ -346,6 +466,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       const VecX saved = m_q;
       m_q_start = m_q;
       const std::vector<ContactElement> saved_contacts = m_contact ? m_problem->contacts() : std::vector<ContactElement>{};
+      const std::vector<double> saved_multipliers = m_bodies ? m_bodies->multipliers() : std::vector<double>{};
       std::vector<double> history;
       int iterations = 0;
       double residual = 0.0;
@@ -362,6 +483,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       }
       if (!ok) {
         m_q = saved;
+        if (m_bodies) m_bodies->set_multipliers(saved_multipliers);
         if (m_contact && m_problem->set_contacts(saved_contacts, m_contact->friction()))
           m_linear->analyze(m_problem->pattern());
         ++m_stats.cuts;
@@ -399,6 +521,18 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       info.increment_time = seconds_since(t_increment);
       info.step_end = lambda >= 1.0;
       info.reactions = reactions(m_gradient);
+      if (m_bodies) {
+        info.binding_updates = m_binding_updates;
+        info.binding_violation = m_bodies->violation(m_q);
+        for (Index b = 0; b < m_bodies->num_bodies(); ++b) {
+          const BodyState bs = m_bodies->state(b, m_q);
+          const Vec3 u = bs.center - m_model.bodies[b].center;
+          for (const Vec3* v : {&bs.force, &bs.moment, &u, &bs.rotation})
+            info.reactions.insert(info.reactions.end(), v->data(), v->data() + 3);
+          info.bodies.push_back(bs);
+        }
+        m_bodies->commit(m_q);
+      }
       if (m_contact) {
         info.contact_responses = m_contact_responses;
         m_contact->commit(m_problem->contacts(), info.contact_responses, m_q);

@@ -30,6 +30,10 @@ struct IncrementInfo {
   std::vector<double> reactions;  ///< per reaction column (see reaction_columns())
   ContactStats contact;           ///< contact statistics (zero without contact)
   std::vector<ContactResponse> contact_responses;  ///< per contact element, before the history commit
+  std::vector<BodyState> bodies;  ///< per rigid body, at the accepted state
+  int binding_updates = 0;        ///< augmented-Lagrangian multiplier updates
+  int limited_steps = 0;          ///< Newton steps scaled down to the step limit in this increment
+  double binding_violation = 0;   ///< largest binding condition |g| at the accepted state [m]
 };
 
 /// Counters and timings of a run.
@@ -41,6 +45,8 @@ struct SolverStats {
   int regularized_factorizations = 0;
   int line_search_trials = 0;
   int roundoff_convergences = 0;  ///< increments accepted at the round-off floor of the residual
+  int binding_updates = 0;        ///< augmented-Lagrangian multiplier updates
+  int limited_steps = 0;          ///< Newton steps scaled down to the step limit
   double time_assembly = 0;
   double time_factorization = 0;
   double time_solve = 0;
@@ -73,6 +79,7 @@ class StaticSolver {
 
   const VecX& state() const { return m_q; }                        ///< current nodal values
   bool has_contact() const { return m_contact != nullptr; }        ///< [contact] present
+  const BodySystem* bodies() const { return m_bodies.get(); }      ///< rigid bodies (or null)
   const SolverStats& stats() const { return m_stats; }             ///< counters and timings
   const std::vector<std::string>& reaction_columns() const { return m_reaction_columns; }  ///< names
   Problem& problem() { return *m_problem; }                        ///< the assembled problem
@@ -83,11 +90,15 @@ class StaticSolver {
   struct Program;  // resolved loads and displacements per step
   bool solve_increment(int step, double lambda, std::vector<double>& history, int& iterations, double& residual);
   bool newton(std::vector<double>& history, int& iterations, double& residual);
+  /// Newton, then augmented-Lagrangian updates of the binding multipliers until the binding
+  /// conditions hold (each update followed by Newton again).
+  bool equilibrium(std::vector<double>& history, int& iterations, double& residual);
   void apply(int step, double lambda);
   std::vector<double> reactions(const VecX& gradient) const;
 
   const Case& m_case;
   const Model& m_model;
+  std::unique_ptr<BodySystem> m_bodies;  // null without [[body]]
   std::unique_ptr<Problem> m_problem;
   std::unique_ptr<LinearSolver> m_linear;
   std::unique_ptr<Program> m_program;
@@ -102,6 +113,8 @@ class StaticSolver {
   VecX m_length_scale;  // increment weights: 1 on x0, radius on g
   std::vector<std::string> m_reaction_columns;
   std::vector<Index> m_reaction_nodes;
+  int m_binding_updates = 0;  // in the current increment
+  double m_max_step = 0;      // largest nodal motion per Newton iteration [m]; 0 = no limit
   SolverStats m_stats;
   std::function<void(const std::string&)> m_progress;
 };
