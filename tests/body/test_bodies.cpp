@@ -212,6 +212,30 @@ TEST(Bindings, ZeroAtTheReferenceAndUnderAnyRigidMotion) {
   EXPECT_GT(g.tail<3>().norm(), 1e-4);
 }
 
+TEST(Bindings, ManyTurnsInIncrementsStayExactAndSatisfied) {
+  // Ten increments of 0.9 rad about a fixed axis (more than a full turn), each committed:
+  // the frames are exp of the total, the accumulated rotation is the total angle, and a
+  // rigid rotation of the whole assembly keeps every condition at zero.
+  Fixture fx;
+  const Vec3 axis = Vec3(0.3, -0.2, 0.9).normalized();
+  const Vec3 o(0.5, 0.2, 0.0);
+  const VecX& ref = fx.model.reference;
+  VecX q = ref;
+  for (int inc = 1; inc <= 10; ++inc) {
+    const Mat3 total = Eigen::AngleAxisd(0.9 * inc, axis).toRotationMatrix();
+    for (Index n = 0; n < fx.model.num_nodes(); ++n) q.segment<3>(9 * n) = total * (ref.segment<3>(9 * n) - o) + o;
+    for (const Body& b : fx.model.bodies) {
+      q.segment<3>(b.first_dof) = total * (ref.segment<3>(b.first_dof) - o) + o;
+      q.segment<3>(b.first_dof + 3) = 0.9 * axis;
+    }
+    EXPECT_LT(fx.bodies.violation(q), 1e-13) << "increment " << inc;
+    for (Index b = 0; b < fx.bodies.num_bodies(); ++b)
+      EXPECT_LT((fx.bodies.frame(b, q) - total * fx.model.bodies[b].axes).norm(), 1e-13) << "increment " << inc;
+    fx.bodies.commit(q);
+    EXPECT_LT((fx.bodies.committed_rotation(0) - 0.9 * inc * axis).norm(), 1e-13);
+  }
+}
+
 TEST(Bindings, GradientAndHessianMatchFiniteDifferences) {
   std::mt19937 rng(7);
   std::normal_distribution<double> normal(0.0, 1.0);
