@@ -1,16 +1,21 @@
 // The command-line program (FIBRA_BINARY_DIR/fibra) end to end: exit codes, error messages on
-// stderr naming the file and the key, and the outputs of a run that fails to converge.
+// stderr naming the file and the key, the outputs of a run that fails to converge, and the
+// rigid-body outputs and binding errors.
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
+
+#include "fibra/io/case_reader.hpp"
 
 namespace fibra {
 namespace {
@@ -164,6 +169,149 @@ TEST_F(Cli, RunOfAValidCaseSucceeds) {
   EXPECT_EQ(r.code, 0) << r.err;
   for (const char* name : {"history.csv", "nodes.csv", "fibers.pvd", "summary.json"})
     EXPECT_TRUE(fs::is_regular_file(m_dir / "out" / name)) << name;
+}
+
+// ------------------------------------------------------------------------------------------
+// Rigid bodies and averaged bindings through the program: the bundle_pull example's outputs,
+// and the binding errors that are found when the model is built (still exit code 2).
+
+std::vector<std::string> split_csv(const std::string& line) {
+  std::vector<std::string> out;
+  std::stringstream ss(line);
+  std::string field;
+  while (std::getline(ss, field, ',')) out.push_back(field);
+  return out;
+}
+
+TEST_F(Cli, RunOfTheBundleExampleWritesTheBodyOutputs) {
+  const fs::path file = fs::path(FIBRA_SOURCE_DIR) / "examples" / "bundle_pull" / "bundle_pull.toml";
+  const Result r = fibra("run '" + file.string() + "' --out out");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const fs::path out = m_dir / "out";
+
+  // history.csv: the body's and the binding's columns.
+  std::ifstream in(out / "history.csv");
+  std::string header, line, last;
+  ASSERT_TRUE(std::getline(in, header));
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  const std::vector<std::string> columns = split_csv(header);
+  for (const char* name : {"body:grip:fx", "body:grip:mz", "body:grip:ux", "body:grip:rz", "binding:updates",
+                           "binding:max_violation"})
+    EXPECT_NE(std::find(columns.begin(), columns.end(), name), columns.end()) << name << " not in " << header;
+
+  // The last row: the grip is where the example's last step puts it.
+  const Case c = read_case(file.string());
+  ASSERT_FALSE(c.steps.empty());
+  ASSERT_EQ(c.steps.back().bodies.size(), 1u);
+  ASSERT_TRUE(c.steps.back().bodies[0].displacement[0].has_value());
+  const double prescribed = *c.steps.back().bodies[0].displacement[0];
+  EXPECT_GT(prescribed, 0.0);
+  const std::vector<std::string> row = split_csv(last);
+  ASSERT_EQ(row.size(), columns.size()) << last;
+  const size_t ux = std::find(columns.begin(), columns.end(), "body:grip:ux") - columns.begin();
+  ASSERT_LT(ux, row.size());
+  EXPECT_NEAR(std::stod(row[ux]), prescribed, 1e-12 * prescribed) << last;
+  EXPECT_EQ(row[0], c.steps.back().name);
+
+  // bodies.pvd and its .vtu files.
+  EXPECT_TRUE(fs::is_regular_file(out / "bodies.pvd"));
+  int vtus = 0;
+  for (const fs::directory_entry& f : fs::directory_iterator(out)) {
+    const std::string name = f.path().filename().string();
+    if (name.rfind("bodies_", 0) == 0 && f.path().extension() == ".vtu") ++vtus;
+  }
+  EXPECT_GE(vtus, 1);
+  EXPECT_NE(slurp(out / "bodies.pvd").find("bodies_"), std::string::npos);
+
+  // summary.json counts the body and the binding.
+  const nlohmann::json s = nlohmann::json::parse(slurp(out / "summary.json"));
+  EXPECT_EQ(s.value("status", ""), "converged");
+  ASSERT_TRUE(s.contains("counts")) << s.dump(2);
+  EXPECT_EQ(s["counts"].value("bodies", -1), 1) << s.dump(2);
+  EXPECT_EQ(s["counts"].value("bindings", -1), 1) << s.dump(2);
+}
+
+// Three fibers whose ends, bound to "grip", are not on one line (b is out of the plane z = 0).
+const std::string kBound = R"(
+[[material]]
+name = "steel"
+young = 210e9
+poisson = 0.3
+
+[[fiber]]
+name = "a"
+material = "steel"
+radius = 1e-4
+points = [[0, -1e-3, 0], [0.01, -1e-3, 0]]
+elements = 2
+
+[[fiber]]
+name = "b"
+material = "steel"
+radius = 1e-4
+points = [[0, 0, 1e-3], [0.01, 0, 1e-3]]
+elements = 2
+
+[[fiber]]
+name = "c"
+material = "steel"
+radius = 1e-4
+points = [[0, 1e-3, 0], [0.01, 1e-3, 0]]
+elements = 2
+
+[[fix]]
+fiber = "a"
+node = "first"
+
+[[fix]]
+fiber = "b"
+node = "first"
+
+[[fix]]
+fiber = "c"
+node = "first"
+
+[[body]]
+name = "grip"
+center = [0.01, 0, 0]
+
+[[binding]]
+body = "grip"
+ends = [{ fiber = "a", node = "last" }, { fiber = "b", node = "last" }, { fiber = "c", node = "last" }]
+
+[[step]]
+  [[step.body]]
+  name = "grip"
+  displacement = [1e-5, 0, 0]
+)";
+
+TEST_F(Cli, CheckAcceptsABindingOfThreeEndsNotOnALine) {
+  write("bound.toml", kBound);
+  const Result r = fibra("check bound.toml");
+  EXPECT_EQ(r.code, 0) << r.err;
+}
+
+TEST_F(Cli, CheckRejectsABindingWhoseEndsLieOnOneLine) {
+  // b moved into the plane z = 0: the three ends lie on the line x = 0.01, z = 0.
+  write("collinear.toml",
+        replace(kBound, "points = [[0, 0, 1e-3], [0.01, 0, 1e-3]]", "points = [[0, 0, 0], [0.01, 0, 0]]"));
+  const Result r = fibra("check collinear.toml");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("collinear.toml"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("binding[0]"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("one line"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, CheckRejectsABodyWithoutMembers) {
+  // A second body that no [[binding]] names.
+  write("lonely.toml", replace(kBound, "[[binding]]", "[[body]]\nname = \"spare\"\ncenter = [0, 0, 0]\n\n[[binding]]"));
+  const Result r = fibra("check lonely.toml");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("lonely.toml"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("body[1]"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("spare"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("has no members"), std::string::npos) << r.err;
 }
 
 }  // namespace
