@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "fibra/core/error.hpp"
+#include "io/case_compare.hpp"
 
 namespace fibra {
 namespace {
@@ -151,118 +153,7 @@ void expect_vec(const Vec3& actual, const Vec3& expected) {
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(actual[i], expected[i], 1e-14) << "component " << i;
 }
 
-void expect_same_node(const NodeRef& a, const NodeRef& b) {
-  EXPECT_EQ(a.fiber, b.fiber);
-  EXPECT_EQ(a.kind, b.kind);
-  EXPECT_EQ(a.index, b.index);
-  EXPECT_DOUBLE_EQ(a.fraction, b.fraction);
-}
-
-/// Checks two cases hold the same data (except file and name).
-void expect_same_case(const Case& a, const Case& b) {
-  EXPECT_EQ(a.title, b.title);
-  ASSERT_EQ(a.materials.size(), b.materials.size());
-  for (std::size_t i = 0; i < a.materials.size(); ++i) {
-    const MaterialSpec& x = a.materials[i];
-    const MaterialSpec& y = b.materials[i];
-    EXPECT_EQ(x.name, y.name);
-    EXPECT_EQ(x.model, y.model);
-    EXPECT_DOUBLE_EQ(x.young, y.young);
-    EXPECT_DOUBLE_EQ(x.poisson, y.poisson);
-    EXPECT_DOUBLE_EQ(x.young_transverse, y.young_transverse);
-    EXPECT_DOUBLE_EQ(x.shear_axial, y.shear_axial);
-    EXPECT_DOUBLE_EQ(x.poisson_transverse, y.poisson_transverse);
-  }
-  ASSERT_EQ(a.fibers.size(), b.fibers.size());
-  for (std::size_t i = 0; i < a.fibers.size(); ++i) {
-    const FiberSpec& x = a.fibers[i];
-    const FiberSpec& y = b.fibers[i];
-    EXPECT_EQ(x.name, y.name);
-    EXPECT_EQ(x.material, y.material);
-    EXPECT_DOUBLE_EQ(x.radius, y.radius);
-    EXPECT_DOUBLE_EQ(x.semi_axis_1, y.semi_axis_1);
-    EXPECT_DOUBLE_EQ(x.semi_axis_2, y.semi_axis_2);
-    ASSERT_EQ(x.section_direction.has_value(), y.section_direction.has_value());
-    if (x.section_direction) expect_vec(*x.section_direction, *y.section_direction);
-    EXPECT_EQ(x.elements, y.elements);
-    EXPECT_EQ(x.path.kind, y.path.kind);
-    ASSERT_EQ(x.path.points.size(), y.path.points.size());
-    for (std::size_t k = 0; k < x.path.points.size(); ++k) expect_vec(x.path.points[k], y.path.points[k]);
-    expect_vec(x.path.center, y.path.center);
-    expect_vec(x.path.axis, y.path.axis);
-    EXPECT_DOUBLE_EQ(x.path.radius, y.path.radius);
-    EXPECT_DOUBLE_EQ(x.path.start_angle, y.path.start_angle);
-    EXPECT_DOUBLE_EQ(x.path.angle, y.path.angle);
-    EXPECT_DOUBLE_EQ(x.path.pitch, y.path.pitch);
-    EXPECT_DOUBLE_EQ(x.path.turns, y.path.turns);
-  }
-  ASSERT_EQ(a.fixes.size(), b.fixes.size());
-  for (std::size_t i = 0; i < a.fixes.size(); ++i) {
-    expect_same_node(a.fixes[i].node, b.fixes[i].node);
-    EXPECT_EQ(a.fixes[i].dofs, b.fixes[i].dofs);
-    EXPECT_EQ(a.fixes[i].sections(), b.fixes[i].sections());
-  }
-  ASSERT_EQ(a.steps.size(), b.steps.size());
-  for (std::size_t i = 0; i < a.steps.size(); ++i) {
-    const StepSpec& x = a.steps[i];
-    const StepSpec& y = b.steps[i];
-    EXPECT_EQ(x.name, y.name);
-    EXPECT_EQ(x.increments, y.increments);
-    EXPECT_EQ(x.max_increments, y.max_increments);
-    ASSERT_EQ(x.loads.size(), y.loads.size());
-    for (std::size_t k = 0; k < x.loads.size(); ++k) {
-      expect_same_node(x.loads[k].node, y.loads[k].node);
-      expect_vec(x.loads[k].force, y.loads[k].force);
-      expect_vec(x.loads[k].moment, y.loads[k].moment);
-    }
-    ASSERT_EQ(x.displacements.size(), y.displacements.size());
-    for (std::size_t k = 0; k < x.displacements.size(); ++k) {
-      expect_same_node(x.displacements[k].node, y.displacements[k].node);
-      EXPECT_EQ(x.displacements[k].value, y.displacements[k].value);
-    }
-  }
-  ASSERT_EQ(a.bodies.size(), b.bodies.size());
-  for (std::size_t i = 0; i < a.bodies.size(); ++i) {
-    EXPECT_EQ(a.bodies[i].name, b.bodies[i].name);
-    expect_vec(a.bodies[i].center, b.bodies[i].center);
-    EXPECT_EQ(a.bodies[i].axes, b.bodies[i].axes);
-  }
-  ASSERT_EQ(a.bindings.size(), b.bindings.size());
-  for (std::size_t i = 0; i < a.bindings.size(); ++i) {
-    EXPECT_EQ(a.bindings[i].body, b.bindings[i].body);
-    EXPECT_EQ(a.bindings[i].line, b.bindings[i].line);
-    EXPECT_EQ(a.bindings[i].bodies, b.bindings[i].bodies);
-    ASSERT_EQ(a.bindings[i].ends.size(), b.bindings[i].ends.size());
-    for (std::size_t k = 0; k < a.bindings[i].ends.size(); ++k) {
-      expect_same_node(a.bindings[i].ends[k], b.bindings[i].ends[k]);
-    }
-  }
-  for (std::size_t i = 0; i < a.steps.size(); ++i) {
-    const StepSpec& x = a.steps[i];
-    const StepSpec& y = b.steps[i];
-    ASSERT_EQ(x.bodies.size(), y.bodies.size());
-    for (std::size_t k = 0; k < x.bodies.size(); ++k) {
-      EXPECT_EQ(x.bodies[k].name, y.bodies[k].name);
-      EXPECT_EQ(x.bodies[k].has_displacement, y.bodies[k].has_displacement);
-      EXPECT_EQ(x.bodies[k].displacement, y.bodies[k].displacement);
-      EXPECT_EQ(x.bodies[k].has_rotation, y.bodies[k].has_rotation);
-      EXPECT_EQ(x.bodies[k].rotation, y.bodies[k].rotation);
-      EXPECT_EQ(x.bodies[k].force, y.bodies[k].force);
-      EXPECT_EQ(x.bodies[k].moment, y.bodies[k].moment);
-    }
-  }
-  EXPECT_DOUBLE_EQ(a.solver.binding_tolerance, b.solver.binding_tolerance);
-  EXPECT_EQ(a.solver.max_binding_updates, b.solver.max_binding_updates);
-  EXPECT_DOUBLE_EQ(a.solver.binding_stiffness, b.solver.binding_stiffness);
-  EXPECT_DOUBLE_EQ(a.solver.residual_tolerance, b.solver.residual_tolerance);
-  EXPECT_DOUBLE_EQ(a.solver.displacement_tolerance, b.solver.displacement_tolerance);
-  EXPECT_EQ(a.solver.max_iterations, b.solver.max_iterations);
-  EXPECT_EQ(a.solver.max_cuts, b.solver.max_cuts);
-  EXPECT_EQ(a.solver.line_search, b.solver.line_search);
-  EXPECT_EQ(a.solver.linear_solver, b.solver.linear_solver);
-  EXPECT_EQ(a.output.every, b.output.every);
-  EXPECT_EQ(a.output.tube_sides, b.output.tube_sides);
-}
+using test::expect_same_case;
 
 /// Runs `parse` and checks it throws an InputError naming `file`, `key` and `fragment`.
 template <class Parse>
@@ -1189,6 +1080,506 @@ TEST(CaseReaderBodies, BodyKeyAfterATableHeaderIsHinted) {
   // `body` is a top-level key: written inside [[fix]] it gets the hint about table headers.
   const std::string text = replace_once(kBase, "dofs = \"all\"", "dofs = \"all\"\nbody = \"grip\"");
   expect_toml_error(text, "fix[0].body", "a top-level key must be written before the first [table] header");
+}
+
+}  // namespace
+}  // namespace fibra
+
+// ------------------------------------------------------------------------------------------
+// Woven fabrics ([fabric]), tows ([[tow]]), the weave pattern ([weave]) and step kinds.
+
+namespace fibra {
+namespace {
+
+/// A small fabric: 2 x 2 tows of 3 fibers, the weft with its own fiber count and material.
+const std::string kFabric = R"(
+[[material]]
+name = "glass"
+young = 72e9
+poisson = 0.22
+
+[[material]]
+name = "carbon"
+young = 230e9
+poisson = 0.2
+
+[fabric]
+pattern = "plain"
+warp = { tows = 2, spacing = 1.0e-3 }
+weft = { tows = 2, spacing = 1.2e-3, tow = { fibers = 4 }, fiber = { material = "carbon" } }
+margin = 0.4e-3
+tension = 0.02
+
+  [fabric.tow]
+  fibers = 3
+  width = 0.8e-3
+  thickness = 0.2e-3
+
+  [fabric.fiber]
+  radius = 2.0e-5
+  material = "glass"
+  element_length = 2.5e-4
+
+[[step]]
+name = "weave"
+kind = "weave"
+increments = 5
+
+[[step]]
+name = "relax"
+kind = "relax"
+)";
+
+TEST(CaseReaderFabric, ReadsTheFabricTable) {
+  const Case c = parse_case_toml(kFabric, "fabric.toml");
+  ASSERT_TRUE(c.fabric.has_value());
+  const FabricSpec& f = *c.fabric;
+  EXPECT_EQ(f.pattern, "plain");
+  EXPECT_EQ(f.matrix, (std::vector<std::vector<int>>{{1, 0}, {0, 1}}));
+  EXPECT_EQ(f.warp.tows, 2);
+  EXPECT_DOUBLE_EQ(f.warp.spacing, 1.0e-3);
+  EXPECT_EQ(f.warp.tow.fibers, 3);
+  EXPECT_DOUBLE_EQ(f.warp.tow.width, 0.8e-3);
+  EXPECT_DOUBLE_EQ(f.warp.tow.thickness, 0.2e-3);
+  EXPECT_DOUBLE_EQ(f.warp.fiber.radius, 2.0e-5);
+  EXPECT_EQ(f.warp.fiber.material, "glass");
+  EXPECT_DOUBLE_EQ(f.warp.fiber.element_length, 2.5e-4);
+  // The weft overrides some keys of the shared tables and takes the others from them.
+  EXPECT_EQ(f.weft.tows, 2);
+  EXPECT_DOUBLE_EQ(f.weft.spacing, 1.2e-3);
+  EXPECT_EQ(f.weft.tow.fibers, 4);
+  EXPECT_DOUBLE_EQ(f.weft.tow.width, 0.8e-3);
+  EXPECT_DOUBLE_EQ(f.weft.tow.thickness, 0.2e-3);
+  EXPECT_EQ(f.weft.fiber.material, "carbon");
+  EXPECT_DOUBLE_EQ(f.weft.fiber.radius, 2.0e-5);
+  EXPECT_DOUBLE_EQ(f.margin, 0.4e-3);
+  EXPECT_DOUBLE_EQ(f.tension, 0.02);
+  ASSERT_EQ(c.steps.size(), 2u);
+  EXPECT_EQ(c.steps[0].kind, StepSpec::Kind::Weave);
+  EXPECT_EQ(c.steps[1].kind, StepSpec::Kind::Relax);
+}
+
+TEST(CaseReaderFabric, DefaultsOfMarginAndTension) {
+  std::string text = replace_once(kFabric, "margin = 0.4e-3\n", "");
+  text = replace_once(text, "tension = 0.02\n", "");
+  const Case c = parse_case_toml(text, "fabric.toml");
+  EXPECT_DOUBLE_EQ(c.fabric->margin, 0.5 * 1.2e-3);  // half the larger spacing
+  EXPECT_EQ(c.fabric->tension, 0.0);                  // automatic
+}
+
+TEST(CaseReaderFabric, NamedPatternsAndMatrix) {
+  const auto weave_of = [&](const std::string& line) {
+    return parse_case_toml(replace_once(kFabric, "pattern = \"plain\"", line), "fabric.toml").fabric;
+  };
+  const auto twill = weave_of("pattern = \"twill 2/1\"");
+  EXPECT_EQ(twill->pattern, "twill 2/1");
+  EXPECT_EQ(twill->matrix.size(), 3u);
+  const auto satin = weave_of("pattern = \"satin 5/2\"");
+  EXPECT_EQ(satin->matrix.size(), 5u);
+  const auto matrix = weave_of("matrix = [[1, 1, 0], [0, 1, 1], [1, 0, 1]]");
+  EXPECT_EQ(matrix->pattern, "matrix");
+  EXPECT_EQ(matrix->matrix, (std::vector<std::vector<int>>{{1, 1, 0}, {0, 1, 1}, {1, 0, 1}}));
+}
+
+TEST(CaseReaderFabric, ExpandsTheFabric) {
+  // The generated assembly: 2 x 3 warp fibers and 2 x 4 weft fibers, a body on each tow end
+  // and on each edge, the tows and the weave, the edges' conditions in the first step.
+  const Case c = parse_case_toml(kFabric, "fabric.toml");
+  ASSERT_EQ(c.fibers.size(), 2u * 3 + 2u * 4);
+  EXPECT_EQ(c.fibers[0].name, "warp0.f0");
+  EXPECT_EQ(c.fibers[0].material, "glass");
+  EXPECT_EQ(c.fibers[6].name, "weft0.f0");
+  EXPECT_EQ(c.fibers[6].material, "carbon");
+  ASSERT_EQ(c.tows.size(), 4u);
+  EXPECT_EQ(c.tows[0].name, "warp0");
+  EXPECT_EQ(c.tows[0].direction, TowSpec::Direction::Warp);
+  EXPECT_EQ(c.tows[3].name, "weft1");
+  EXPECT_EQ(c.tows[3].direction, TowSpec::Direction::Weft);
+  EXPECT_EQ(c.tows[3].index, 1);
+  EXPECT_EQ(c.tows[3].fibers.size(), 4u);
+  EXPECT_EQ(c.weave, c.fabric->matrix);
+  std::vector<std::string> bodies;
+  for (const BodySpec& b : c.bodies) bodies.push_back(b.name);
+  for (const char* name : {"warp0.start", "warp0.end", "weft1.start", "weft1.end", "edge.x-", "edge.x+", "edge.y-",
+                           "edge.y+"}) {
+    EXPECT_NE(std::find(bodies.begin(), bodies.end(), name), bodies.end()) << name;
+  }
+  EXPECT_EQ(c.bodies.size(), 4u * 2 + 4);
+  EXPECT_EQ(c.bindings.size(), 4u * 2 + 4);
+  EXPECT_EQ(c.steps[0].bodies.size(), 4u);  // the four edges
+  EXPECT_TRUE(c.steps[1].bodies.empty());
+}
+
+TEST(CaseReaderFabric, UserEntriesMayNameGeneratedFibersAndBodies) {
+  const std::string text = kFabric + R"(
+[[fiber]]
+name = "probe"
+material = "glass"
+radius = 1e-5
+points = [[0, 0, 1e-3], [1e-3, 0, 1e-3]]
+elements = 2
+
+[[body]]
+name = "grip"
+center = [1e-3, 0, 0]
+
+[[binding]]
+body = "grip"
+bodies = ["edge.x+"]
+
+[[fix]]
+fiber = "warp0.f1"
+node = "first"
+dofs = "position"
+
+[[step]]
+name = "pull"
+
+  [[step.load]]
+  fiber = "weft1.f3"
+  node = "last"
+  force = [0, 1e-3, 0]
+
+  [[step.body]]
+  name = "grip"
+  displacement = [1e-5, 0, 0]
+
+  [[step.body]]
+  name = "edge.y+"
+  displacement = [0, 1e-5, 0]
+)";
+  const Case c = parse_case_toml(text, "fabric.toml");
+  // User entries first, then the generated ones.
+  EXPECT_EQ(c.fibers.front().name, "probe");
+  EXPECT_EQ(c.fibers.size(), 1u + 14);
+  EXPECT_EQ(c.bodies.front().name, "grip");
+  EXPECT_EQ(c.bindings.front().body, "grip");
+  EXPECT_EQ(c.bindings.front().bodies, std::vector<std::string>{"edge.x+"});
+  ASSERT_EQ(c.fixes.size(), 1u);
+  EXPECT_EQ(c.fixes[0].node.fiber, "warp0.f1");
+  EXPECT_EQ(c.steps[2].loads[0].node.fiber, "weft1.f3");
+  // An edge a step lists gets no default conditions in the first step.
+  std::vector<std::string> first;
+  for (const BodyStepSpec& b : c.steps[0].bodies) first.push_back(b.name);
+  EXPECT_EQ(first, (std::vector<std::string>{"edge.x-", "edge.x+", "edge.y-"}));
+}
+
+TEST(CaseReaderFabric, JsonGivesTheSameCaseAsToml) {
+  const Case from_toml = parse_case_toml(kFabric, "fabric.toml");
+  const Case from_json = parse_case_json(to_json(kFabric), "fabric.json");
+  expect_same_case(from_toml, from_json);
+}
+
+class BadFabricInput : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(BadFabricInput, NamesFileKeyAndExpectation) {
+  const BadCase& c = GetParam();
+  const std::string text = replace_once(kFabric, c.from, c.to);
+  expect_toml_error(text, c.key, c.fragment);
+  if (c.json) expect_json_error(to_json(text), c.key, c.fragment);
+}
+
+const std::string kSharedTow = "  [fabric.tow]\n  fibers = 3\n  width = 0.8e-3\n  thickness = 0.2e-3\n";
+
+const std::vector<BadCase> kBadFabricCases = {
+    // The weave.
+    {"UnknownPattern", "pattern = \"plain\"", "pattern = \"plian\"", "fabric.pattern",
+     "unknown pattern \"plian\" (did you mean \"plain\"?)"},
+    {"MisspeltTwill", "pattern = \"plain\"", "pattern = \"twil 2/1\"", "fabric.pattern",
+     "(did you mean \"twill 2/1\"?)"},
+    {"BadTwill", "pattern = \"plain\"", "pattern = \"twill 2\"", "fabric.pattern",
+     "a twill is \"twill A/B\" with A, B >= 1"},
+    {"BadSatinMove", "pattern = \"plain\"", "pattern = \"satin 6/3\"", "fabric.pattern",
+     "must be coprime with N"},
+    {"PatternNotString", "pattern = \"plain\"", "pattern = 1", "fabric.pattern", "expected a string, got an integer"},
+    {"PatternAndMatrix", "pattern = \"plain\"", "pattern = \"plain\"\nmatrix = [[1, 0], [0, 1]]", "fabric",
+     "give either pattern or matrix, not both"},
+    {"NoPatternNorMatrix", "pattern = \"plain\"\n", "", "fabric.pattern",
+     "missing the weave: give pattern (\"plain\", \"twill 2/1\", \"satin 5\", ...) or matrix"},
+    {"MatrixConstantColumn", "pattern = \"plain\"", "matrix = [[1, 0], [1, 0]]", "fabric.matrix",
+     "column 0 (a warp) is above every weft: it never interlaces"},
+    {"MatrixConstantRow", "pattern = \"plain\"", "matrix = [[1, 0], [0, 0]]", "fabric.matrix",
+     "row 1 (a weft) is above every warp"},
+    {"MatrixEntryTwo", "pattern = \"plain\"", "matrix = [[1, 0], [0, 2]]", "fabric.matrix",
+     "weave matrix entries must be 0 or 1 (row 1 has 2)"},
+    {"MatrixRagged", "pattern = \"plain\"", "matrix = [[1, 0], [0, 1, 1]]", "fabric.matrix",
+     "the weave matrix is not rectangular: row 1 has 3 entries, row 0 has 2"},
+    {"MatrixEmpty", "pattern = \"plain\"", "matrix = []", "fabric.matrix", "the weave matrix is empty"},
+    {"MatrixFloatEntry", "pattern = \"plain\"", "matrix = [[1, 0.0], [0, 1]]", "fabric.matrix[0][1]",
+     "expected 0 or 1 (an integer), got a floating-point number"},
+    {"MatrixRowNotArray", "pattern = \"plain\"", "matrix = [[1, 0], 1]", "fabric.matrix[1]",
+     "expected the weave repeat: an array of rows (wefts)"},
+    // The directions.
+    {"WarpTowsZero", "warp = { tows = 2,", "warp = { tows = 0,", "fabric.warp.tows", "must be >= 1, got 0"},
+    {"WarpTowsFloat", "warp = { tows = 2,", "warp = { tows = 2.5,", "fabric.warp.tows", "expected an integer"},
+    {"WeftSpacingZero", "spacing = 1.2e-3", "spacing = 0", "fabric.weft.spacing", "must be > 0, got 0"},
+    {"WarpMissing", "warp = { tows = 2, spacing = 1.0e-3 }\n", "", "fabric.warp",
+     "missing required key (expected a table such as { tows = 5, spacing = 1.0e-3 })", false},
+    {"WarpNotTable", "warp = { tows = 2, spacing = 1.0e-3 }", "warp = 2", "fabric.warp",
+     "expected a table, got an integer", false},
+    {"WarpTowNotTable", "warp = { tows = 2,", "warp = { tows = 2, tow = 2,", "fabric.warp.tow",
+     "expected a table, got an integer", false},
+    {"WarpMisspeltKey", "warp = { tows = 2,", "warp = { tows = 2, spacnig = 1, ", "fabric.warp.spacnig",
+     "unknown key \"spacnig\" (did you mean \"spacing\"?)"},
+    // The tow and fiber tables.
+    {"SharedWidthMissing", "  width = 0.8e-3\n", "", "fabric.tow.width",
+     "missing required key (expected a number > 0 [m]): the warp tows take it from fabric.warp.tow or, when not "
+     "given there, from the shared fabric.tow"},
+    {"ThicknessAboveWidth", "  thickness = 0.2e-3", "  thickness = 1e-3", "fabric.tow.thickness",
+     "must be <= the width of the warp tows (0.0008, from fabric.tow.width), got 0.001"},
+    {"WidthNegative", "  width = 0.8e-3", "  width = -0.8e-3", "fabric.tow.width", "must be > 0, got -0.0008"},
+    {"FibersZero", "  fibers = 3", "  fibers = 0", "fabric.tow.fibers", "must be >= 1, got 0"},
+    {"FibersTooFewForTheGenerator", "  fibers = 3", "  fibers = 2", "fabric.warp.tow.fibers",
+     "a tow needs at least 3 fibers"},
+    {"WeftFibersZero", "tow = { fibers = 4 }", "tow = { fibers = 0 }", "fabric.weft.tow.fibers", "must be >= 1, got 0"},
+    {"UnknownMaterial", "  material = \"glass\"", "  material = \"glas\"", "fabric.fiber.material",
+     "no material named \"glas\" (did you mean \"glass\"?); defined materials: glass, carbon"},
+    {"WeftUnknownMaterial", "fiber = { material = \"carbon\" }", "fiber = { material = \"carbn\" }",
+     "fabric.weft.fiber.material", "no material named \"carbn\" (did you mean \"carbon\"?)"},
+    {"RadiusMissing", "  radius = 2.0e-5\n", "", "fabric.fiber.radius", "missing required key"},
+    {"ElementLengthZero", "  element_length = 2.5e-4", "  element_length = 0", "fabric.fiber.element_length",
+     "must be > 0"},
+    {"UnknownTowKey", "  fibers = 3", "  fibres = 3", "fabric.tow.fibres",
+     "unknown key \"fibres\" (did you mean \"fibers\"?)"},
+    {"UnknownFabricKey", "pattern = \"plain\"", "patern = \"plain\"", "fabric.patern",
+     "unknown key \"patern\" (did you mean \"pattern\"?)"},
+    {"MarginNegative", "margin = 0.4e-3", "margin = -1e-3", "fabric.margin", "expected a length >= 0 [m], got -0.001"},
+    {"TensionNegative", "tension = 0.02", "tension = -0.02", "fabric.tension",
+     "expected a force per fiber >= 0 [N] (0 = automatic), got -0.02"},
+    // Names and other tables.
+    {"FiberNameClash", "[[step]]\nname = \"weave\"",
+     "[[fiber]]\nname = \"warp1.f2\"\nmaterial = \"glass\"\nradius = 1e-5\npoints = [[0, 0, 0], [1, 0, 0]]\n"
+     "elements = 1\n\n[[step]]\nname = \"weave\"",
+     "fiber[0].name", "fiber name \"warp1.f2\" is also the name of a fiber the [fabric] generates"},
+    {"BodyNameClash", "[[step]]\nname = \"weave\"",
+     "[[body]]\nname = \"edge.y-\"\ncenter = [0, 0, 0]\n\n[[step]]\nname = \"weave\"",
+     "body[0].name", "body name \"edge.y-\" is also the name of a body the [fabric] generates"},
+    {"WeaveWithFabric", "[[step]]\nname = \"weave\"", "[weave]\npattern = \"plain\"\n\n[[step]]\nname = \"weave\"",
+     "weave", "the weave of a [fabric] is its pattern or matrix: remove the [weave] table", false},
+    {"BindingOfAGeneratedMember", "[[step]]\nname = \"weave\"",
+     "[[body]]\nname = \"grip\"\ncenter = [0, 0, 0]\n\n[[binding]]\nbody = \"grip\"\nbodies = [\"warp0.end\"]\n\n"
+     "[[step]]\nname = \"weave\"",
+     "binding[0].bodies[0]",
+     "body \"warp0.end\" is a member of two bindings, a binding the [fabric] generates (to body \"edge.x+\") and "
+     "binding[0] (to body \"grip\")"},
+    {"UnknownGeneratedFiber", "[[step]]\nname = \"weave\"",
+     "[[fix]]\nfiber = \"warp2.f0\"\nnode = \"first\"\n\n[[step]]\nname = \"weave\"", "fix[0].fiber",
+     "no fiber named \"warp2.f0\" (did you mean \"warp0.f0\"?); defined fibers: warp0.f0, warp0.f1, warp0.f2, "
+     "warp1.f0"},
+    {"TowClashesWithGenerated", "[[step]]\nname = \"weave\"",
+     "[[tow]]\nname = \"warp0\"\ndirection = \"warp\"\nindex = 5\nfibers = [\"weft0.f0\"]\n\n"
+     "[[step]]\nname = \"weave\"",
+     "tow[0].name", "duplicate tow name \"warp0\" (already used by tow \"warp0\" (generated by the [fabric]))"},
+};
+
+INSTANTIATE_TEST_SUITE_P(CaseReaderFabric, BadFabricInput, ::testing::ValuesIn(kBadFabricCases),
+                         [](const ::testing::TestParamInfo<BadCase>& param_info) {
+                           return std::string(param_info.param.name);
+                         });
+
+TEST(CaseReaderFabric, UnknownPatternListsTheAcceptedForms) {
+  const std::string text = replace_once(kFabric, "pattern = \"plain\"", "pattern = \"hopsack\"");
+  for (const char* fragment : {"unknown pattern \"hopsack\"", "\"plain\"", "\"twill A/B\"", "\"twill 2/1\"",
+                               "\"basket N\"", "\"satin N/M\"", "matrix"}) {
+    expect_toml_error(text, "fabric.pattern", fragment);
+  }
+}
+
+TEST(CaseReaderFabric, FabricMustBeATable) {
+  expect_toml_error("fabric = 1\n" + kMinimal, "fabric", "expected a table, got an integer");
+  expect_json_error(to_json("fabric = [1]\n" + kMinimal), "fabric", "expected an object, got an array of 1 element");
+}
+
+TEST(CaseReaderFabric, OwnTableMissingAKeyIsNamed) {
+  // No shared tow table: the weft's own table lacks the width.
+  std::string text = replace_once(kFabric, kSharedTow, "");
+  text = replace_once(text, "warp = { tows = 2, spacing = 1.0e-3 }",
+                      "warp = { tows = 2, spacing = 1.0e-3, "
+                      "tow = { fibers = 3, width = 0.8e-3, thickness = 0.2e-3 } }");
+  expect_toml_error(text, "fabric.weft.tow.width",
+                    "missing required key (expected a number > 0 [m]): the weft tows take it from fabric.weft.tow or, "
+                    "when not given there, from the shared fabric.tow");
+  // Nor an own table: named in the shared table.
+  text = replace_once(text, ", tow = { fibers = 4 }", "");
+  expect_toml_error(text, "fabric.tow.fibers", "the weft tows take it from fabric.weft.tow");
+}
+
+TEST(CaseReaderFabric, FibersAreOptionalWithAFabric) {
+  const Case c = parse_case_toml("fiber = []\n" + kFabric, "fabric.toml");
+  EXPECT_EQ(c.fibers.size(), 14u);
+  // Without a fabric, fibers are still required.
+  expect_toml_error(replace_once(kMinimal, "[[fiber]]\nname = \"beam\"\nmaterial = \"steel\"\nradius = 0.01\n"
+                                           "points = [[0, 0, 0], [1, 0, 0]]\nelements = 4\n", ""),
+                    "fiber", "missing required key (expected an array of tables ([[fiber]]), or a [fabric])");
+  expect_toml_error("fiber = []\n" + kMinimal.substr(0, kMinimal.find("[[fiber]]")) + "[[step]]\n", "fiber",
+                    "at least one fiber (or a [fabric]) is required");
+}
+
+// -- [[tow]], [weave] and step kinds -------------------------------------------------------
+
+/// Four fibers in two warp and two weft tows, woven plain; weave, relax and standard steps.
+const std::string kTows = R"(
+[[material]]
+name = "glass"
+young = 72e9
+poisson = 0.22
+
+[[fiber]]
+name = "w0"
+material = "glass"
+radius = 1e-4
+points = [[-2e-3, -0.5e-3, 0], [2e-3, -0.5e-3, 0]]
+elements = 8
+
+[[fiber]]
+name = "w1"
+material = "glass"
+radius = 1e-4
+points = [[-2e-3, 0.5e-3, 0], [2e-3, 0.5e-3, 0]]
+elements = 8
+
+[[fiber]]
+name = "f0"
+material = "glass"
+radius = 1e-4
+points = [[-0.5e-3, -2e-3, 0], [-0.5e-3, 2e-3, 0]]
+elements = 8
+
+[[fiber]]
+name = "f1"
+material = "glass"
+radius = 1e-4
+points = [[0.5e-3, -2e-3, 0], [0.5e-3, 2e-3, 0]]
+elements = 8
+
+[[tow]]
+name = "A"
+direction = "warp"
+index = 0
+fibers = ["w0"]
+
+[[tow]]
+name = "B"
+direction = "warp"
+index = 1
+fibers = ["w1"]
+
+[[tow]]
+name = "C"
+direction = "weft"
+index = 0
+fibers = ["f0", "f1"]
+
+[weave]
+matrix = [[1, 0], [0, 1]]
+
+[[step]]
+name = "weave"
+kind = "weave"
+
+[[step]]
+name = "relax"
+kind = "relax"
+
+[[step]]
+name = "pull"
+)";
+
+TEST(CaseReaderTows, ReadsTowsWeaveAndStepKinds) {
+  const Case c = parse_case_toml(kTows, "tows.toml");
+  ASSERT_EQ(c.tows.size(), 3u);
+  EXPECT_EQ(c.tows[0].name, "A");
+  EXPECT_EQ(c.tows[0].direction, TowSpec::Direction::Warp);
+  EXPECT_EQ(c.tows[0].index, 0);
+  EXPECT_EQ(c.tows[0].fibers, std::vector<std::string>{"w0"});
+  EXPECT_EQ(c.tows[1].index, 1);
+  EXPECT_EQ(c.tows[2].direction, TowSpec::Direction::Weft);
+  EXPECT_EQ(c.tows[2].fibers, (std::vector<std::string>{"f0", "f1"}));
+  EXPECT_EQ(c.weave, (std::vector<std::vector<int>>{{1, 0}, {0, 1}}));
+  EXPECT_FALSE(c.fabric.has_value());
+  ASSERT_EQ(c.steps.size(), 3u);
+  EXPECT_EQ(c.steps[0].kind, StepSpec::Kind::Weave);
+  EXPECT_EQ(c.steps[1].kind, StepSpec::Kind::Relax);
+  EXPECT_EQ(c.steps[2].kind, StepSpec::Kind::Standard);  // the default
+  // A weave pattern by name.
+  const Case twill = parse_case_toml(replace_once(kTows, "matrix = [[1, 0], [0, 1]]", "pattern = \"twill 2/2\""),
+                                     "tows.toml");
+  EXPECT_EQ(twill.weave.size(), 4u);
+  // JSON reads the same.
+  expect_same_case(c, parse_case_json(to_json(kTows), "tows.json"));
+}
+
+TEST(CaseReaderTows, TowsAndWeaveWithoutWeaveSteps) {
+  // Tows without [weave] are fine while no step weaves; so is a [weave] without tows.
+  std::string text = replace_once(kTows, "kind = \"weave\"", "kind = \"standard\"");
+  const Case no_weave = parse_case_toml(replace_once(text, "[weave]\nmatrix = [[1, 0], [0, 1]]\n", ""), "tows.toml");
+  EXPECT_TRUE(no_weave.weave.empty());
+  EXPECT_EQ(no_weave.steps[0].kind, StepSpec::Kind::Standard);
+}
+
+class BadTowInput : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(BadTowInput, NamesFileKeyAndExpectation) {
+  const BadCase& c = GetParam();
+  const std::string text = replace_once(kTows, c.from, c.to);
+  expect_toml_error(text, c.key, c.fragment);
+  if (c.json) expect_json_error(to_json(text), c.key, c.fragment);
+}
+
+const std::string kTowA = "[[tow]]\nname = \"A\"\ndirection = \"warp\"\nindex = 0\nfibers = [\"w0\"]\n";
+const std::string kTowB = "[[tow]]\nname = \"B\"\ndirection = \"warp\"\nindex = 1\nfibers = [\"w1\"]\n";
+const std::string kTowC = "[[tow]]\nname = \"C\"\ndirection = \"weft\"\nindex = 0\nfibers = [\"f0\", \"f1\"]\n";
+
+const std::vector<BadCase> kBadTowCases = {
+    {"UnknownFiber", "fibers = [\"f0\", \"f1\"]", "fibers = [\"f0\", \"f2\"]", "tow[2].fibers[1]",
+     "no fiber named \"f2\" (did you mean \"f0\"?); defined fibers: w0, w1, f0, f1"},
+    {"FiberInTwoTows", "fibers = [\"w1\"]", "fibers = [\"w0\"]", "tow[1].fibers[0]",
+     "fiber \"w0\" is already in tow \"A\" (tow[0]): a fiber belongs to at most one tow"},
+    {"FiberTwiceInATow", "fibers = [\"f0\", \"f1\"]", "fibers = [\"f0\", \"f0\"]", "tow[2].fibers[1]",
+     "fiber \"f0\" is listed twice in this tow (already tow[2].fibers[0])"},
+    {"NoFibers", "fibers = [\"w1\"]", "fibers = []", "tow[1].fibers", "expected at least one fiber name"},
+    {"FibersNotArray", "fibers = [\"w1\"]", "fibers = \"w1\"", "tow[1].fibers",
+     "expected an array of fiber names (strings), got a string"},
+    {"FibersMissing", "fibers = [\"w1\"]\n", "", "tow[1].fibers", "missing required key"},
+    {"DuplicateName", "name = \"B\"", "name = \"A\"", "tow[1].name",
+     "duplicate tow name \"A\" (already used by tow \"A\" (tow[0]))"},
+    {"NameMissing", "name = \"B\"\n", "", "tow[1].name", "missing required key"},
+    {"BadDirection", "direction = \"weft\"", "direction = \"wfet\"", "tow[2].direction",
+     "expected \"warp\" or \"weft\", got \"wfet\" (did you mean \"weft\"?)"},
+    {"IndexNegative", "index = 1", "index = -1", "tow[1].index", "must be >= 0, got -1"},
+    {"IndexMissing", "index = 1\n", "", "tow[1].index", "missing required key"},
+    {"IndexTaken", "index = 1", "index = 0", "tow[1].index", "warp tow index 0 is already used by tow \"A\" (tow[0])"},
+    {"UnknownTowKey", "index = 1", "indx = 1", "tow[1].indx", "unknown key \"indx\" (did you mean \"index\"?)"},
+    // [weave].
+    {"WeaveBadMatrix", "matrix = [[1, 0], [0, 1]]", "matrix = [[1, 1], [0, 1]]", "weave.matrix",
+     "row 0 (a weft) is below every warp"},
+    {"WeaveBadPattern", "matrix = [[1, 0], [0, 1]]", "pattern = \"satin\"", "weave.pattern",
+     "a satin is \"satin N\" or \"satin N/M\" with N >= 5"},
+    {"WeaveBoth", "matrix = [[1, 0], [0, 1]]", "matrix = [[1, 0], [0, 1]]\npattern = \"plain\"", "weave",
+     "give either pattern or matrix, not both"},
+    {"WeaveNeither", "matrix = [[1, 0], [0, 1]]", "", "weave.matrix", "missing the weave: give matrix"},
+    {"WeaveUnknownKey", "matrix = [[1, 0], [0, 1]]", "matrx = [[1, 0], [0, 1]]", "weave.matrx",
+     "unknown key \"matrx\" (did you mean \"matrix\"?)"},
+    // Step kinds.
+    {"UnknownKind", "kind = \"relax\"", "kind = \"relx\"", "step[1].kind",
+     "expected \"standard\", \"weave\" or \"relax\", got \"relx\" (did you mean \"relax\"?)"},
+    {"KindNotString", "kind = \"relax\"", "kind = 1", "step[1].kind", "expected a string, got an integer"},
+    {"WeaveStepWithoutTows", kTowA + "\n" + kTowB + "\n" + kTowC, "", "step[0].kind",
+     "a weave step needs tows: define [[tow]] entries (or a [fabric])", false},
+    {"WeaveStepWithoutWeave", "[weave]\nmatrix = [[1, 0], [0, 1]]\n", "", "step[0].kind",
+     "a weave step needs the weave pattern: give a [weave] table (matrix or pattern)", false},
+};
+
+INSTANTIATE_TEST_SUITE_P(CaseReaderTows, BadTowInput, ::testing::ValuesIn(kBadTowCases),
+                         [](const ::testing::TestParamInfo<BadCase>& param_info) {
+                           return std::string(param_info.param.name);
+                         });
+
+TEST(CaseReaderTows, JsonWordsForWeaveSteps) {
+  expect_json_error(to_json(replace_once(kTows, kTowA + "\n" + kTowB + "\n" + kTowC, "")), "step[0].kind",
+                    "a weave step needs tows: define tow entries (or a fabric object)");
+  expect_json_error(to_json(replace_once(kTows, "[weave]\nmatrix = [[1, 0], [0, 1]]\n", "")), "step[0].kind",
+                    "a weave step needs the weave pattern: give a weave object (matrix or pattern)");
 }
 
 }  // namespace

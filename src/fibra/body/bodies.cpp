@@ -280,8 +280,8 @@ double BodySystem::binding_energy(const Binding& b, const VecX& q, VecX* grad, E
   for (const Member& m : b.members) {
     if (m.body >= 0) continue;
     for (int d = 0; d < 9; ++d) {
-      const double w = d < 3 ? m_mu : m_mu * m.r2;
-      energy += 0.5 * w * (q[m.dof + d] - m.anchor[d]) * (q[m.dof + d] - m.anchor[d]);
+      const double spring = d < 3 ? m_mu : m_mu * m.r2;
+      energy += 0.5 * spring * (q[m.dof + d] - m.anchor[d]) * (q[m.dof + d] - m.anchor[d]);
     }
   }
   if (!derivatives) return energy;
@@ -336,7 +336,15 @@ double BodySystem::binding_energy(const Binding& b, const VecX& q, VecX* grad, E
   if (!hess) return energy;
 
   auto h = hess->topLeftCorner(ns, ns);
-  h.noalias() = b.k * jac.transpose() * jac;
+  // k J^T J as six rank-one updates: plain loops (Eigen would thread a product this size
+  // over the OpenMP threads, which is slower here and not wanted inside a sequential loop).
+  h.setZero();
+  for (int row = 0; row < 6; ++row)
+    for (int col = 0; col < ns; ++col) {
+      const double v = b.k * jac(row, col);
+      if (v == 0.0) continue;
+      h.col(col).noalias() += v * jac.row(row).transpose();
+    }
   for (const Member& m : b.members)
     if (m.body < 0)
       for (int d = 0; d < 9; ++d) h(m.offset + d, m.offset + d) += d < 3 ? m_mu : m_mu * m.r2;

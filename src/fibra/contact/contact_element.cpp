@@ -20,7 +20,7 @@ double contact_element_energy(const ContactElement& c, const double* q_a, const 
                               ContactResponse* response, bool consistent, bool accumulate) {
   const Vec3 d = particle_position(c.b, q_b) - particle_position(c.a, q_a);
   const Vec3& nrm = c.normal;
-  const double gap = d.dot(nrm);
+  const double gap = d.dot(nrm) + c.offset;
   const double p = -gap;
   const double fn = c.law.force(p);
   double energy = c.law.potential(p);

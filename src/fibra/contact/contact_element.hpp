@@ -34,6 +34,8 @@ struct ContactElement {
   PenaltyLaw law;                  ///< normal law (stiffness adapted per proximity zone)
   int zone = 0;                    ///< proximity zone index
   bool fresh = true;               ///< appeared at the last detection (no history carried over)
+  bool prescribed = false;         ///< normal set by the weave pattern (not updated from the centres)
+  double offset = 0;               ///< added to the gap: penetration hidden from the law [m] (weaving)
   // Friction history (at the last converged increment).
   Vec3 friction_previous = Vec3::Zero();  ///< tangential force on B at the last converged state [N]
   Vec3 separation_previous = Vec3::Zero();  ///< x_B - x_A at the last converged state [m]

@@ -118,6 +118,10 @@ double ContactManager::update_normals(std::vector<ContactElement>& contacts, con
   std::vector<Vec3> fresh(contacts.size());
   for (size_t k = 0; k < contacts.size(); ++k) {
     const ContactElement& c = contacts[k];
+    if (c.prescribed) {
+      fresh[k] = c.normal;
+      continue;
+    }
     const Vec3 d = section_centre(m_model, c.b, q) - section_centre(m_model, c.a, q);
     const double len = d.norm();
     fresh[k] = len > 0.0 ? Vec3(d / len) : c.normal;
@@ -126,6 +130,28 @@ double ContactManager::update_normals(std::vector<ContactElement>& contacts, con
   if (turn >= m_spec.normal_tolerance)
     for (size_t k = 0; k < contacts.size(); ++k) contacts[k].normal = fresh[k];
   return turn;
+}
+
+double ContactManager::prescribe_normals(std::vector<ContactElement>& contacts, const VecX& q, const Vec3& direction,
+                                        const std::function<int(int, int)>& rule, double offset) const {
+  double deepest = 0.0;
+  for (ContactElement& c : contacts) {
+    const BeamElement& ea = m_model.elements[c.a.element];
+    const BeamElement& eb = m_model.elements[c.b.element];
+    const int side = rule(ea.fiber, eb.fiber);
+    if (side == 0) continue;
+    c.normal = side * direction;
+    c.prescribed = true;
+    c.offset = offset;
+    Vec3 x, g1, g2;
+    section_at(q.data() + ea.first_dof, c.a.eta, x, g1, g2);
+    border_point(g1, g2, c.normal, m_model.sections[ea.section].a, m_model.sections[ea.section].b, c.a.xi1, c.a.xi2);
+    section_at(q.data() + eb.first_dof, c.b.eta, x, g1, g2);
+    border_point(g1, g2, -c.normal, m_model.sections[eb.section].a, m_model.sections[eb.section].b, c.b.xi1, c.b.xi2);
+    const Vec3 d = particle_position(c.b, q.data() + eb.first_dof) - particle_position(c.a, q.data() + ea.first_dof);
+    deepest = std::max(deepest, -d.dot(c.normal));
+  }
+  return deepest;
 }
 
 int ContactManager::adapt_penalty(std::vector<ContactElement>& contacts,
@@ -240,7 +266,7 @@ double ContactManager::penetration_ratio(const std::vector<ContactElement>& cont
   for (const ContactElement& c : contacts) {
     const Vec3 d = particle_position(c.b, q.data() + m_model.elements[c.b.element].first_dof) -
                    particle_position(c.a, q.data() + m_model.elements[c.a.element].first_dof);
-    worst = std::max(worst, -d.dot(c.normal) / (m_spec.max_penetration * pair_radius(c)));
+    worst = std::max(worst, -(d.dot(c.normal) + c.offset) / (m_spec.max_penetration * pair_radius(c)));
   }
   return worst;
 }

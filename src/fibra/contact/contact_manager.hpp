@@ -2,6 +2,7 @@
 /// Contact bookkeeping between the solver's loops (METHOD §3-4): builds contact elements from a
 /// detection (laws, history carried over), updates normals, adapts the penalty per proximity
 /// zone, and commits friction history at convergence.
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -40,6 +41,13 @@ class ContactManager {
   /// Computes each normal as the unit vector between its section centres at q and, if any
   /// turned by the normal tolerance or more, sets them all; returns the largest turn [rad].
   double update_normals(std::vector<ContactElement>& contacts, const VecX& q) const;
+  /// Weaving (METHOD §6): every element whose fibers `rule(fiber_a, fiber_b)` maps to +1 or -1
+  /// gets the normal rule * `direction` (from A towards B), its border particles re-chosen to
+  /// face that way, and is marked prescribed (update_normals leaves it); `offset` is added to
+  /// its gap (penetration the law does not see yet: the tows separate progressively).
+  /// Returns the largest penetration of the prescribed elements without the offset [m].
+  double prescribe_normals(std::vector<ContactElement>& contacts, const VecX& q, const Vec3& direction,
+                           const std::function<int(int, int)>& rule, double offset) const;
   /// Raises the penalty of every zone whose largest penetration exceeds the allowed one; returns
   /// the number of zones raised.
   int adapt_penalty(std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses) const;

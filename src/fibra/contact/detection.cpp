@@ -150,6 +150,8 @@ bool plane_cut(const std::vector<CentroidCurve>& curves, Index first, Index coun
   return false;
 }
 
+}  // namespace
+
 // Centre and section vectors at eta of an element (27 dofs).
 void section_at(const double* q_e, double eta, Vec3& x0, Vec3& g1, Vec3& g2) {
   double n[3], dn[3];
@@ -180,7 +182,6 @@ void border_point(const Vec3& g1, const Vec3& g2, const Vec3& toward, double a, 
   xi2 = z2 / scale;
 }
 
-}  // namespace
 
 struct ContactDetector::Workspace {
   std::vector<ElementPair> block;  // the fiber's candidate pairs, by (fiber of second, first, second)

@@ -11,6 +11,12 @@
 
 namespace fibra {
 
+/// Centre and section vectors at eta of an element (its 27 dofs q_e).
+void section_at(const double* q_e, double eta, Vec3& x0, Vec3& g1, Vec3& g2);
+/// Section coordinates (xi1, xi2) of the border point of the ellipse (semi-axes a along g1, b
+/// along g2) in the direction of `toward` projected on the section plane.
+void border_point(const Vec3& g1, const Vec3& g2, const Vec3& toward, double a, double b, double& xi1, double& xi2);
+
 /// Detection settings; a zero selects the default, which depends on the pair's radii.
 struct DetectionParams {
   /// Extra distance beyond r_i + r_j for proximity [m]; 0 -> half the smaller radius of the pair.

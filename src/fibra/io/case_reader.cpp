@@ -19,10 +19,12 @@
 #include <sstream>
 #include <string_view>
 #include <toml++/toml.h>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
 #include "fibra/core/error.hpp"
+#include "fibra/model/fabric.hpp"
 
 namespace fibra {
 namespace {
@@ -305,6 +307,23 @@ std::string list_names(const Range& names) {
   return out;
 }
 
+/// Lists of names longer than this are given only in part in messages.
+constexpr std::size_t kListedNames = 20;
+
+/// "a, b, c" for at most kListedNames names, then "... (N in all)".
+template <class Range>
+std::string list_some_names(const Range& names) {
+  std::string out;
+  std::size_t count = 0;
+  for (const auto& name : names) {
+    if (count++ >= kListedNames) continue;
+    if (!out.empty()) out += ", ";
+    out += std::string_view(name);
+  }
+  if (count > kListedNames) out += fmt::format(", ... ({} in all)", count);
+  return out;
+}
+
 constexpr double kDegree = std::numbers::pi / 180.0;
 
 /// A key allowed only in another variant of a table, with the message explaining why.
@@ -316,8 +335,11 @@ struct KeyHint {
 using Keys = std::vector<std::string_view>;
 
 /// The keys of the top level of a case file.
-const Keys kTopLevelKeys = {
-    "title", "material", "fiber", "fix", "body", "binding", "step", "solver", "contact", "output"};
+const Keys kTopLevelKeys = {"title", "material", "fiber", "fabric", "fix",     "body",  "binding",
+                            "tow",   "weave",    "step",  "solver", "contact", "output"};
+
+/// The first words of the named weave patterns (model/fabric.hpp), for suggestions.
+const Keys kWeaveWords = {"plain", "twill", "basket", "satin"};
 
 // ------------------------------------------------------------------------------------------
 // Schema validation, written once for both formats.
@@ -537,20 +559,53 @@ class Reader {
   /// Checks that `name`, read from `v` at `key`, is the name of one of `bodies`.
   void expect_body(const std::string& name, const Value& v, const std::string& key,
                    const std::vector<BodySpec>& bodies) const {
-    std::vector<std::string> names;
     for (const BodySpec& b : bodies) {
       if (b.name == name) return;
-      names.push_back(b.name);
     }
+    std::vector<std::string> names;
+    for (const BodySpec& b : bodies) names.push_back(b.name);
     if (names.empty()) {
       fail(key, fmt::format("no body named \"{}\": no {} is defined", name, m_json ? "body" : "[[body]]"),
            &v);
     }
     fail(key,
          fmt::format("no body named \"{}\"{}; defined bodies: {}", name, did_you_mean(name, names),
+                     list_some_names(names)),
+         &v);
+  }
+
+  /// The fiber named `name`, read from `v` at `key`; fails naming the closest defined fiber.
+  const FiberSpec& expect_fiber(const std::string& name, const Value& v, const std::string& key,
+                                const std::vector<FiberSpec>& fibers) const {
+    for (const FiberSpec& f : fibers) {
+      if (f.name == name) return f;
+    }
+    std::vector<std::string> names;
+    for (const FiberSpec& f : fibers) names.push_back(f.name);
+    fail(key,
+         fmt::format("no fiber named \"{}\"{}; defined fibers: {}", name, did_you_mean(name, names),
+                     list_some_names(names)),
+         &v);
+  }
+
+  /// Checks that `name`, read from `v` at `key`, is the name of one of `materials`.
+  void expect_material(const std::string& name, const Value& v, const std::string& key,
+                       const std::vector<MaterialSpec>& materials) const {
+    std::vector<std::string> names;
+    for (const MaterialSpec& m : materials) {
+      if (m.name == name) return;
+      names.push_back(m.name);
+    }
+    fail(key,
+         fmt::format("no material named \"{}\"{}; defined materials: {}", name, did_you_mean(name, names),
                      list_names(names)),
          &v);
   }
+
+  /// A weave repeat written as an array of rows of 0/1 integers, checked by check_weave().
+  std::vector<std::vector<int>> to_weave_matrix(const Value& v, const std::string& key) const;
+  /// The repeat of a named weave pattern (named_weave()), read from the string `v` at `key`.
+  std::vector<std::vector<int>> to_named_weave(const Value& v, const std::string& key, std::string& pattern) const;
 
   // -- sections ------------------------------------------------------------------------
 
@@ -565,9 +620,16 @@ class Reader {
   BodySpec read_body(const Value& t, const std::string& path) const;
   BindingSpec read_binding(const Value& t, const std::string& path, std::size_t k,
                            const std::vector<FiberSpec>& fibers, const std::vector<BodySpec>& bodies,
-                           const std::vector<BindingSpec>& earlier) const;
+                           const std::vector<BindingSpec>& earlier, std::size_t generated) const;
   StepSpec read_step(const Value& t, const std::string& path, std::size_t k,
                      const std::vector<FiberSpec>& fibers, const std::vector<BodySpec>& bodies) const;
+  FabricSpec read_fabric(const Value& t, const std::string& path,
+                         const std::vector<MaterialSpec>& materials) const;
+  FabricDirectionSpec read_fabric_direction(const Value& fabric, const std::string& path, const char* name,
+                                            const Value* shared_tow, const Value* shared_fiber,
+                                            const std::vector<MaterialSpec>& materials) const;
+  TowSpec read_tow(const Value& t, const std::string& path, const std::vector<FiberSpec>& fibers,
+                   const std::vector<TowSpec>& earlier, std::size_t generated) const;
   BodyStepSpec read_step_body(const Value& t, const std::string& path,
                               const std::vector<BodySpec>& bodies) const;
   LoadSpec read_load(const Value& t, const std::string& path,
@@ -743,16 +805,7 @@ FiberSpec Reader::read_fiber(const Value& t, const std::string& path,
   const std::string material_key = join(path, "material");
   const Value& material = require(t, path, "material", "a string naming a [[material]]");
   f.material = to_string(material, material_key);
-  const bool known = std::any_of(materials.begin(), materials.end(),
-                                 [&](const MaterialSpec& m) { return m.name == f.material; });
-  if (!known) {
-    std::vector<std::string> names;
-    for (const MaterialSpec& m : materials) names.push_back(m.name);
-    fail(material_key,
-         fmt::format("no material named \"{}\"{}; defined materials: {}", f.material,
-                     did_you_mean(f.material, names), list_names(names)),
-         &material);
-  }
+  expect_material(f.material, material, material_key, materials);
 
   const Value* radius = find(t, "radius");
   const Value* semi_axes = find(t, "semi_axes");
@@ -801,16 +854,7 @@ NodeRef Reader::read_node(const Value& t, const std::string& path,
   const std::string fiber_key = join(path, "fiber");
   const Value& fiber = require(t, path, "fiber", "a string naming a [[fiber]]");
   ref.fiber = to_string(fiber, fiber_key);
-  auto it = std::find_if(fibers.begin(), fibers.end(),
-                         [&](const FiberSpec& f) { return f.name == ref.fiber; });
-  if (it == fibers.end()) {
-    std::vector<std::string> names;
-    for (const FiberSpec& f : fibers) names.push_back(f.name);
-    fail(fiber_key,
-         fmt::format("no fiber named \"{}\"{}; defined fibers: {}", ref.fiber,
-                     did_you_mean(ref.fiber, names), list_names(names)),
-         &fiber);
-  }
+  const FiberSpec* it = &expect_fiber(ref.fiber, fiber, fiber_key, fibers);
 
   const Value* node = find(t, "node");
   const Value* at = find(t, "at");
@@ -987,7 +1031,12 @@ BodySpec Reader::read_body(const Value& t, const std::string& path) const {
 
 BindingSpec Reader::read_binding(const Value& t, const std::string& path, std::size_t k,
                                  const std::vector<FiberSpec>& fibers, const std::vector<BodySpec>& bodies,
-                                 const std::vector<BindingSpec>& earlier) const {
+                                 const std::vector<BindingSpec>& earlier, std::size_t generated) const {
+  // earlier[j]: the bindings the [fabric] generates (j < generated), then binding[j - generated].
+  const auto describe_binding = [&](std::size_t j) {
+    if (j < generated) return fmt::format("a binding the [fabric] generates (to body \"{}\")", earlier[j].body);
+    return fmt::format("binding[{}] (to body \"{}\")", j - generated, earlier[j].body);
+  };
   check_keys(t, path, {"body", "ends", "bodies"});
   BindingSpec b;
   b.line = static_cast<int>(k);
@@ -1061,9 +1110,9 @@ BindingSpec Reader::read_binding(const Value& t, const std::string& path, std::s
       for (std::size_t j = 0; j < earlier.size(); ++j) {
         if (std::find(earlier[j].bodies.begin(), earlier[j].bodies.end(), name) != earlier[j].bodies.end()) {
           fail(member_key,
-               fmt::format("body \"{}\" is a member of two bindings, binding[{}] (to body \"{}\") and binding[{}] "
-                           "(to body \"{}\"): a body can be a member of at most one binding",
-                           name, j, earlier[j].body, k, b.body),
+               fmt::format("body \"{}\" is a member of two bindings, {} and binding[{}] (to body \"{}\"): a body "
+                           "can be a member of at most one binding",
+                           name, describe_binding(j), k, b.body),
                &e);
         }
       }
@@ -1145,12 +1194,28 @@ BodyStepSpec Reader::read_step_body(const Value& t, const std::string& path,
 
 StepSpec Reader::read_step(const Value& t, const std::string& path, std::size_t k,
                            const std::vector<FiberSpec>& fibers, const std::vector<BodySpec>& bodies) const {
-  check_keys(t, path, {"name", "increments", "max_increments", "load", "displacement", "body"});
+  check_keys(t, path, {"name", "kind", "increments", "max_increments", "load", "displacement", "body"});
   StepSpec step;
   if (const Value* v = find(t, "name")) {
     step.name = to_name(*v, join(path, "name"));
   } else {
     step.name = fmt::format("step{}", k);
+  }
+  if (const Value* v = find(t, "kind")) {
+    const std::string key = join(path, "kind");
+    const std::string kind = to_string(*v, key);
+    if (kind == "standard") {
+      step.kind = StepSpec::Kind::Standard;
+    } else if (kind == "weave") {
+      step.kind = StepSpec::Kind::Weave;
+    } else if (kind == "relax") {
+      step.kind = StepSpec::Kind::Relax;
+    } else {
+      const Keys words = {"standard", "weave", "relax"};
+      fail(key,
+           fmt::format("expected \"standard\", \"weave\" or \"relax\", got \"{}\"{}", kind, did_you_mean(kind, words)),
+           v);
+    }
   }
   if (const Value* v = find(t, "increments")) step.increments = to_int(*v, join(path, "increments"), 1);
   if (const Value* v = find(t, "max_increments")) {
@@ -1194,6 +1259,270 @@ StepSpec Reader::read_step(const Value& t, const std::string& path, std::size_t 
     }
   }
   return step;
+}
+
+std::vector<std::vector<int>> Reader::to_weave_matrix(const Value& v, const std::string& key) const {
+  const std::string expected = "expected the weave repeat: an array of rows (wefts), each an array of 0/1 "
+                               "integers, one per warp (1 = warp above)";
+  if (v.type != Value::Type::Array) fail(key, fmt::format("{}, got {}", expected, describe(v)), &v);
+  std::vector<std::vector<int>> matrix;
+  for (std::size_t j = 0; j < v.items.size(); ++j) {
+    const Value& row = v.items[j];
+    const std::string row_key = item(key, j);
+    if (row.type != Value::Type::Array) fail(row_key, fmt::format("{}, got {}", expected, describe(row)), &row);
+    std::vector<int>& out = matrix.emplace_back();
+    for (std::size_t i = 0; i < row.items.size(); ++i) {
+      const Value& e = row.items[i];
+      if (e.type != Value::Type::Integer) {
+        fail(item(row_key, i), fmt::format("expected 0 or 1 (an integer), got {}", describe(e)), &row);
+      }
+      if (e.integer < INT_MIN || e.integer > INT_MAX) {
+        fail(item(row_key, i), fmt::format("expected 0 or 1, got {}", e.integer), &row);
+      }
+      out.push_back(static_cast<int>(e.integer));
+    }
+  }
+  if (const std::string why = check_weave(matrix); !why.empty()) fail(key, why, &v);
+  return matrix;
+}
+
+std::vector<std::vector<int>> Reader::to_named_weave(const Value& v, const std::string& key,
+                                                     std::string& pattern) const {
+  pattern = to_string(v, key);
+  std::string error;
+  std::vector<std::vector<int>> matrix = named_weave(pattern, error);
+  if (!error.empty() || matrix.empty()) {
+    if (error.empty()) error = fmt::format("unknown pattern \"{}\"", pattern);
+    // A misspelt first word ("twil 2/1"): suggest the pattern with it corrected.
+    std::string word = lowercase(pattern);
+    word.erase(0, word.find_first_not_of(" \t"));
+    const std::size_t end = word.find(' ');
+    const std::string rest = end == std::string::npos ? "" : word.substr(end);
+    word = word.substr(0, end);
+    if (std::find(kWeaveWords.begin(), kWeaveWords.end(), word) == kWeaveWords.end()) {
+      if (auto best = closest(word, kWeaveWords)) {
+        // Right after the pattern when the message quotes it.
+        const std::string suggestion = fmt::format(" (did you mean \"{}{}\"?)", *best, rest);
+        const std::string quoted = fmt::format("\"{}\"", pattern);
+        const std::size_t at = error.find(quoted);
+        error.insert(at == std::string::npos ? error.size() : at + quoted.size(), suggestion);
+      }
+    }
+    fail(key, error, &v);
+  }
+  return matrix;
+}
+
+FabricDirectionSpec Reader::read_fabric_direction(const Value& fabric, const std::string& path, const char* name,
+                                                  const Value* shared_tow, const Value* shared_fiber,
+                                                  const std::vector<MaterialSpec>& materials) const {
+  const std::string base = join(path, name);
+  const Value& d =
+      require(fabric, path, name, fmt::format("{} such as {{ tows = 5, spacing = 1.0e-3 }}", table_word()));
+  expect_table(d, base);
+  check_keys(d, base, {"tows", "spacing", "tow", "fiber"});
+  FabricDirectionSpec s;
+  s.tows = to_int(require(d, base, "tows", "an integer >= 1"), join(base, "tows"), 1);
+  s.spacing = positive(require(d, base, "spacing", "a number > 0 [m]"), join(base, "spacing"));
+
+  const Value* own_tow = find(d, "tow");
+  const Value* own_fiber = find(d, "fiber");
+  const std::string own_tow_path = join(base, "tow");
+  const std::string own_fiber_path = join(base, "fiber");
+  const std::string shared_tow_path = join(path, "tow");
+  const std::string shared_fiber_path = join(path, "fiber");
+  if (own_tow) {
+    expect_table(*own_tow, own_tow_path);
+    check_keys(*own_tow, own_tow_path, {"fibers", "width", "thickness"});
+  }
+  if (own_fiber) {
+    expect_table(*own_fiber, own_fiber_path);
+    check_keys(*own_fiber, own_fiber_path, {"radius", "material", "element_length"});
+  }
+  // A key of this direction's own table, else of the shared one; missing from both: an error
+  // at the key of the table this direction uses.
+  struct Found {
+    const Value* value;
+    std::string key;
+  };
+  const auto lookup = [&](const Value* own, const std::string& own_path, const Value* shared,
+                          const std::string& shared_path, std::string_view key, std::string_view expected) {
+    if (own != nullptr) {
+      if (const Value* v = find(*own, key)) return Found{v, join(own_path, key)};
+    }
+    if (shared != nullptr) {
+      if (const Value* v = find(*shared, key)) return Found{v, join(shared_path, key)};
+    }
+    const Value* at = own != nullptr ? own : shared != nullptr ? shared : &d;
+    fail(own != nullptr ? join(own_path, key) : join(shared_path, key),
+         fmt::format("missing required key (expected {}): the {} tows take it from {} or, when not given there, "
+                     "from the shared {}",
+                     expected, name, own_path, shared_path),
+         at);
+  };
+
+  const Found fibers = lookup(own_tow, own_tow_path, shared_tow, shared_tow_path, "fibers", "an integer >= 1");
+  s.tow.fibers = to_int(*fibers.value, fibers.key, 1);
+  const Found width = lookup(own_tow, own_tow_path, shared_tow, shared_tow_path, "width", "a number > 0 [m]");
+  s.tow.width = positive(*width.value, width.key);
+  const Found thickness =
+      lookup(own_tow, own_tow_path, shared_tow, shared_tow_path, "thickness", "a number > 0 [m], <= width");
+  s.tow.thickness = positive(*thickness.value, thickness.key);
+  if (!(s.tow.thickness <= s.tow.width)) {
+    fail(thickness.key,
+         fmt::format("must be <= the width of the {} tows ({}, from {}), got {}", name, s.tow.width, width.key,
+                     s.tow.thickness),
+         thickness.value);
+  }
+
+  const Found radius = lookup(own_fiber, own_fiber_path, shared_fiber, shared_fiber_path, "radius", "a number > 0 [m]");
+  s.fiber.radius = positive(*radius.value, radius.key);
+  const Found material =
+      lookup(own_fiber, own_fiber_path, shared_fiber, shared_fiber_path, "material", "a string naming a [[material]]");
+  s.fiber.material = to_string(*material.value, material.key);
+  expect_material(s.fiber.material, *material.value, material.key, materials);
+  const Found element_length = lookup(own_fiber, own_fiber_path, shared_fiber, shared_fiber_path, "element_length",
+                                      "a number > 0 [m]");
+  s.fiber.element_length = positive(*element_length.value, element_length.key);
+  return s;
+}
+
+FabricSpec Reader::read_fabric(const Value& t, const std::string& path,
+                               const std::vector<MaterialSpec>& materials) const {
+  expect_table(t, path);
+  check_keys(t, path, {"pattern", "matrix", "warp", "weft", "margin", "tension", "tow", "fiber"});
+  FabricSpec f;
+  const Value* pattern = find(t, "pattern");
+  const Value* matrix = find(t, "matrix");
+  if (pattern && matrix) fail(path, "give either pattern or matrix, not both", &t);
+  if (pattern) {
+    f.matrix = to_named_weave(*pattern, join(path, "pattern"), f.pattern);
+  } else if (matrix) {
+    f.pattern = "matrix";
+    f.matrix = to_weave_matrix(*matrix, join(path, "matrix"));
+  } else {
+    fail(join(path, "pattern"),
+         "missing the weave: give pattern (\"plain\", \"twill 2/1\", \"satin 5\", ...) or matrix (the repeat: rows = "
+         "wefts, columns = warps, 1 = warp above)",
+         &t);
+  }
+
+  // The shared tables; each key is checked here even when both directions override it.
+  const Value* shared_tow = find(t, "tow");
+  const Value* shared_fiber = find(t, "fiber");
+  if (shared_tow) {
+    const std::string base = join(path, "tow");
+    expect_table(*shared_tow, base);
+    check_keys(*shared_tow, base, {"fibers", "width", "thickness"});
+    if (const Value* v = find(*shared_tow, "fibers")) to_int(*v, join(base, "fibers"), 1);
+    if (const Value* v = find(*shared_tow, "width")) positive(*v, join(base, "width"));
+    if (const Value* v = find(*shared_tow, "thickness")) positive(*v, join(base, "thickness"));
+  }
+  if (shared_fiber) {
+    const std::string base = join(path, "fiber");
+    expect_table(*shared_fiber, base);
+    check_keys(*shared_fiber, base, {"radius", "material", "element_length"});
+    if (const Value* v = find(*shared_fiber, "radius")) positive(*v, join(base, "radius"));
+    if (const Value* v = find(*shared_fiber, "material")) {
+      expect_material(to_string(*v, join(base, "material")), *v, join(base, "material"), materials);
+    }
+    if (const Value* v = find(*shared_fiber, "element_length")) positive(*v, join(base, "element_length"));
+  }
+  f.warp = read_fabric_direction(t, path, "warp", shared_tow, shared_fiber, materials);
+  f.weft = read_fabric_direction(t, path, "weft", shared_tow, shared_fiber, materials);
+
+  f.margin = 0.5 * std::max(f.warp.spacing, f.weft.spacing);
+  if (const Value* v = find(t, "margin")) {
+    const std::string key = join(path, "margin");
+    f.margin = to_number(*v, key);
+    if (!(f.margin >= 0)) fail(key, fmt::format("expected a length >= 0 [m], got {}", f.margin), v);
+  }
+  if (const Value* v = find(t, "tension")) {
+    const std::string key = join(path, "tension");
+    f.tension = to_number(*v, key);
+    if (!(f.tension >= 0)) {
+      fail(key, fmt::format("expected a force per fiber >= 0 [N] (0 = automatic), got {}", f.tension), v);
+    }
+  }
+  return f;
+}
+
+TowSpec Reader::read_tow(const Value& t, const std::string& path, const std::vector<FiberSpec>& fibers,
+                         const std::vector<TowSpec>& earlier, std::size_t generated) const {
+  check_keys(t, path, {"name", "direction", "index", "fibers"});
+  // earlier[j]: the tows the [fabric] generates (j < generated), then tow[j - generated].
+  const auto describe_tow = [&](std::size_t j) {
+    if (j < generated) return fmt::format("tow \"{}\" (generated by the [fabric])", earlier[j].name);
+    return fmt::format("tow \"{}\" (tow[{}])", earlier[j].name, j - generated);
+  };
+  TowSpec tow;
+  {
+    const std::string key = join(path, "name");
+    const Value& v = require(t, path, "name", "a string");
+    tow.name = to_name(v, key);
+    for (std::size_t j = 0; j < earlier.size(); ++j) {
+      if (earlier[j].name == tow.name) {
+        fail(key, fmt::format("duplicate tow name \"{}\" (already used by {})", tow.name, describe_tow(j)), &v);
+      }
+    }
+  }
+  {
+    const std::string key = join(path, "direction");
+    const Value& v = require(t, path, "direction", "\"warp\" or \"weft\"");
+    const std::string direction = to_string(v, key);
+    if (direction == "warp") {
+      tow.direction = TowSpec::Direction::Warp;
+    } else if (direction == "weft") {
+      tow.direction = TowSpec::Direction::Weft;
+    } else {
+      const Keys words = {"warp", "weft"};
+      fail(key,
+           fmt::format("expected \"warp\" or \"weft\", got \"{}\"{}", direction, did_you_mean(direction, words)),
+           &v);
+    }
+  }
+  {
+    const std::string key = join(path, "index");
+    const Value& v = require(t, path, "index", "an integer >= 0, the position among the tows of its direction");
+    tow.index = to_int(v, key, 0);
+    for (std::size_t j = 0; j < earlier.size(); ++j) {
+      if (earlier[j].direction == tow.direction && earlier[j].index == tow.index) {
+        fail(key,
+             fmt::format("{} tow index {} is already used by {}",
+                         tow.direction == TowSpec::Direction::Warp ? "warp" : "weft", tow.index, describe_tow(j)),
+             &v);
+      }
+    }
+  }
+  {
+    const std::string key = join(path, "fibers");
+    const Value& v = require(t, path, "fibers", "an array of fiber names");
+    if (v.type != Value::Type::Array) {
+      fail(key, fmt::format("expected an array of fiber names (strings), got {}", describe(v)), &v);
+    }
+    if (v.items.empty()) fail(key, "expected at least one fiber name, got an empty array", &v);
+    for (std::size_t i = 0; i < v.items.size(); ++i) {
+      const std::string member_key = item(key, i);
+      const Value& e = v.items[i];
+      const std::string name = to_string(e, member_key);
+      expect_fiber(name, e, member_key, fibers);
+      if (const auto it = std::find(tow.fibers.begin(), tow.fibers.end(), name); it != tow.fibers.end()) {
+        fail(member_key,
+             fmt::format("fiber \"{}\" is listed twice in this tow (already {})", name,
+                         item(key, static_cast<std::size_t>(it - tow.fibers.begin()))),
+             &e);
+      }
+      for (std::size_t j = 0; j < earlier.size(); ++j) {
+        if (std::find(earlier[j].fibers.begin(), earlier[j].fibers.end(), name) != earlier[j].fibers.end()) {
+          fail(member_key,
+               fmt::format("fiber \"{}\" is already in {}: a fiber belongs to at most one tow", name, describe_tow(j)),
+               &e);
+        }
+      }
+      tow.fibers.push_back(name);
+    }
+  }
+  return tow;
 }
 
 SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
@@ -1308,6 +1637,7 @@ OutputSpec Reader::read_output(const Value& t, const std::string& path) const {
 Case Reader::read(const Value& root) const {
   check_keys(root, "", kTopLevelKeys);
   Case c;
+  c.file = m_file;  // expand_fabric names it in its messages
   if (const Value* v = find(root, "title")) c.title = to_string(*v, "title");
 
   // Materials.
@@ -1329,11 +1659,21 @@ Case Reader::read(const Value& root) const {
     }
   }
 
-  // Fibers.
-  {
-    const Value& v = require(root, "", "fiber", table_array_word("fiber"));
-    const std::vector<Value>& tables = to_table_array(v, "fiber", "fiber");
-    if (tables.empty()) fail("fiber", "at least one fiber is required", &v);
+  // A woven fabric (optional), expanded into fibers, bodies, bindings and tows below.
+  if (const Value* v = find(root, "fabric")) c.fabric = read_fabric(*v, "fabric", c.materials);
+  const std::string fabric_word = m_json ? "a fabric object" : "a [fabric]";
+
+  // Fibers: at least one, unless a [fabric] makes them.
+  const Value* fiber_value = find(root, "fiber");
+  if (fiber_value == nullptr && !c.fabric) {
+    fail("fiber", fmt::format("missing required key (expected {}, or {})", table_array_word("fiber"), fabric_word),
+         &root);
+  }
+  if (fiber_value != nullptr) {
+    const std::vector<Value>& tables = to_table_array(*fiber_value, "fiber", "fiber");
+    if (tables.empty() && !c.fabric) {
+      fail("fiber", fmt::format("at least one fiber (or {}) is required", fabric_word), fiber_value);
+    }
     for (std::size_t i = 0; i < tables.size(); ++i) {
       const std::string path = item("fiber", i);
       FiberSpec f = read_fiber(tables[i], path, c.materials);
@@ -1345,14 +1685,6 @@ Case Reader::read(const Value& root) const {
         }
       }
       c.fibers.push_back(std::move(f));
-    }
-  }
-
-  // Fixes (optional).
-  if (const Value* v = find(root, "fix")) {
-    const std::vector<Value>& tables = to_table_array(*v, "fix", "fix");
-    for (std::size_t i = 0; i < tables.size(); ++i) {
-      c.fixes.push_back(read_fix(tables[i], item("fix", i), c.fibers));
     }
   }
 
@@ -1373,12 +1705,88 @@ Case Reader::read(const Value& root) const {
     }
   }
 
-  // Averaged bindings (optional).
+  // What the fabric generates, so that fixes, bindings, tows and steps may name its fibers and
+  // bodies: the fabric expanded alone (expand_fabric appends the same entities to `c` at the end).
+  Case generated;
+  generated.file = m_file;
+  if (c.fabric) {
+    generated.materials = c.materials;
+    generated.fabric = c.fabric;
+    expand_fabric(generated);
+    const auto clash = [&](const auto& user, const auto& made, const char* what, const char* naming) {
+      std::unordered_set<std::string> names;
+      for (const auto& x : made) names.insert(x.name);
+      const Value* tables = find(root, what);
+      for (std::size_t i = 0; i < user.size(); ++i) {
+        if (names.count(user[i].name) == 0) continue;
+        const Value* at = tables != nullptr && i < tables->items.size() ? find(tables->items[i], "name") : nullptr;
+        fail(join(item(what, i), "name"),
+             fmt::format("{} name \"{}\" is also the name of a {} the [fabric] generates ({})", what, user[i].name,
+                         what, naming),
+             at);
+      }
+    };
+    clash(c.fibers, generated.fibers, "fiber", "fibers warp<i>.f<k> and weft<j>.f<k>");
+    clash(c.bodies, generated.bodies, "body",
+          "bodies warp<i>.start, warp<i>.end, weft<j>.start, weft<j>.end and edge.x-, edge.x+, edge.y-, edge.y+");
+  }
+  std::vector<FiberSpec> all_fibers = c.fibers;
+  all_fibers.insert(all_fibers.end(), generated.fibers.begin(), generated.fibers.end());
+  std::vector<BodySpec> all_bodies = c.bodies;
+  all_bodies.insert(all_bodies.end(), generated.bodies.begin(), generated.bodies.end());
+
+  // Fixes (optional).
+  if (const Value* v = find(root, "fix")) {
+    const std::vector<Value>& tables = to_table_array(*v, "fix", "fix");
+    for (std::size_t i = 0; i < tables.size(); ++i) {
+      c.fixes.push_back(read_fix(tables[i], item("fix", i), all_fibers));
+    }
+  }
+
+  // Averaged bindings (optional), checked together with those the fabric generates.
   if (const Value* v = find(root, "binding")) {
     const std::vector<Value>& tables = to_table_array(*v, "binding", "binding");
+    std::vector<BindingSpec> earlier = generated.bindings;
     for (std::size_t i = 0; i < tables.size(); ++i) {
-      c.bindings.push_back(read_binding(tables[i], item("binding", i), i, c.fibers, c.bodies, c.bindings));
+      BindingSpec b = read_binding(tables[i], item("binding", i), i, all_fibers, all_bodies, earlier,
+                                   generated.bindings.size());
+      earlier.push_back(b);
+      c.bindings.push_back(std::move(b));
     }
+  }
+
+  // Tows (optional), checked together with those the fabric generates.
+  if (const Value* v = find(root, "tow")) {
+    const std::vector<Value>& tables = to_table_array(*v, "tow", "tow");
+    std::vector<TowSpec> earlier = generated.tows;
+    for (std::size_t i = 0; i < tables.size(); ++i) {
+      TowSpec t = read_tow(tables[i], item("tow", i), all_fibers, earlier, generated.tows.size());
+      earlier.push_back(t);
+      c.tows.push_back(std::move(t));
+    }
+  }
+
+  // The weave pattern of the tows (optional; a [fabric] has its own).
+  if (const Value* v = find(root, "weave")) {
+    if (c.fabric) {
+      fail("weave",
+           fmt::format("the weave of {} is its pattern or matrix: remove the {}", fabric_word,
+                       m_json ? "weave object" : "[weave] table"),
+           v);
+    }
+    expect_table(*v, "weave");
+    check_keys(*v, "weave", {"matrix", "pattern"});
+    const Value* matrix = find(*v, "matrix");
+    const Value* pattern = find(*v, "pattern");
+    if (matrix && pattern) fail("weave", "give either pattern or matrix, not both", v);
+    if (!matrix && !pattern) {
+      fail("weave.matrix",
+           "missing the weave: give matrix (the repeat: rows = wefts, columns = warps, 1 = warp above) or pattern "
+           "(\"plain\", \"twill 2/1\", \"satin 5\", ...)",
+           v);
+    }
+    std::string name;
+    c.weave = matrix ? to_weave_matrix(*matrix, "weave.matrix") : to_named_weave(*pattern, "weave.pattern", name);
   }
 
   // Steps.
@@ -1388,12 +1796,28 @@ Case Reader::read(const Value& root) const {
     if (tables.empty()) fail("step", "at least one step is required", &v);
     for (std::size_t i = 0; i < tables.size(); ++i) {
       const std::string path = item("step", i);
-      StepSpec s = read_step(tables[i], path, i, c.fibers, c.bodies);
+      StepSpec s = read_step(tables[i], path, i, all_fibers, all_bodies);
       for (std::size_t j = 0; j < c.steps.size(); ++j) {
         if (c.steps[j].name == s.name) {
           fail(join(path, "name"),
                fmt::format("duplicate step name \"{}\" (already used by step[{}])", s.name, j),
                find(tables[i], "name") ? find(tables[i], "name") : &tables[i]);
+        }
+      }
+      // A weave step orients the contacts between crossing tows by the weave pattern.
+      if (s.kind == StepSpec::Kind::Weave) {
+        const std::string key = join(path, "kind");
+        if (c.tows.empty() && !c.fabric) {
+          fail(key,
+               fmt::format("a weave step needs tows: define {} entries (or {})", m_json ? "tow" : "[[tow]]",
+                           fabric_word),
+               find(tables[i], "kind"));
+        }
+        if (c.weave.empty() && !c.fabric) {
+          fail(key,
+               fmt::format("a weave step needs the weave pattern: give {} (matrix or pattern)",
+                           m_json ? "a weave object" : "a [weave] table"),
+               find(tables[i], "kind"));
         }
       }
       c.steps.push_back(std::move(s));
@@ -1403,6 +1827,10 @@ Case Reader::read(const Value& root) const {
   if (const Value* v = find(root, "solver")) c.solver = read_solver(*v, "solver");
   if (const Value* v = find(root, "output")) c.output = read_output(*v, "output");
   if (const Value* v = find(root, "contact")) c.contact = read_contact(*v, "contact");
+
+  // Last: the fabric's fibers, bodies, bindings, tows and weave, and the edges' conditions in
+  // the first step (for the edges no step lists).
+  if (c.fabric) expand_fabric(c);
   return c;
 }
 

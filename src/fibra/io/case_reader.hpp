@@ -1,7 +1,9 @@
 #pragma once
 /// Reading and validating case files (TOML or JSON, one schema; see docs/case-file.md).
 /// Every problem in the input is reported as an InputError naming the file, the dotted key
-/// path (e.g. `fiber[1].radius`, `step[0].load[2].force`) and what was expected.
+/// path (e.g. `fiber[1].radius`, `step[0].load[2].force`) and what was expected. A [fabric]
+/// is expanded (expand_fabric, model/fabric.hpp): the case holds its generated fibers, bodies,
+/// bindings, tows, weave and edge conditions after those of the file, which may refer to them.
 #include <string>
 
 #include "fibra/model/case.hpp"

@@ -123,10 +123,55 @@ struct BodyStepSpec {
   std::optional<Vec3> moment;                         ///< moment about the centre [N m]
 };
 
+/// Fibers packed in a tow's elliptical section before weaving.
+struct TowSectionSpec {
+  int fibers = 0;        ///< fibers per tow
+  double width = 0;      ///< ellipse axis in the fabric plane [m]
+  double thickness = 0;  ///< ellipse axis normal to the fabric [m]
+};
+
+/// The fibers of one direction of a fabric.
+struct FabricFiberSpec {
+  double radius = 0;          ///< [m]
+  std::string material;       ///< a [[material]] name
+  double element_length = 0;  ///< target element length [m]
+};
+
+/// One direction of a fabric: warp tows run along x, weft tows along y.
+struct FabricDirectionSpec {
+  int tows = 0;          ///< number of tows
+  double spacing = 0;    ///< distance between tow axes [m]
+  TowSectionSpec tow;
+  FabricFiberSpec fiber;
+};
+
+/// A [fabric] table: the fabric the generator builds (model/fabric.hpp).
+struct FabricSpec {
+  std::string pattern;                    ///< as written: "plain", "twill 2/1", ..., or "matrix"
+  std::vector<std::vector<int>> matrix;   ///< repeat, matrix[weft row][warp column]: 1 = warp above
+  FabricDirectionSpec warp, weft;
+  double margin = 0;   ///< free length of every tow beyond the outer crossings [m]
+  double tension = 0;  ///< force per fiber pulling the free edges during weaving [N]; 0 = default
+};
+
+/// A tow of a fiber assembly ([[tow]]): a named group of fibers, warp or weft; the weave
+/// steps use it to orient the contacts between crossing tows.
+struct TowSpec {
+  enum class Direction { Warp, Weft };
+  std::string name;
+  Direction direction = Direction::Warp;
+  int index = 0;                     ///< position among the tows of its direction (0-based)
+  std::vector<std::string> fibers;   ///< fiber names
+};
+
 /// A load step: loads and displacements ramp linearly over the step from where the previous
 /// step ended; an entry not listed again keeps its last value.
 struct StepSpec {
+  /// standard: usual contact; weave: contacts between crossing tows pushed to the side the
+  /// weave pattern says (METHOD §6); relax: usual normals, after weaving.
+  enum class Kind { Standard, Weave, Relax };
   std::string name;
+  Kind kind = Kind::Standard;
   int increments = 1;      ///< initial number of increments (the solver adapts)
   int max_increments = 0;  ///< 0 = 100 * increments
   std::vector<LoadSpec> loads;
@@ -181,6 +226,9 @@ struct Case {
   std::vector<FixSpec> fixes;
   std::vector<BodySpec> bodies;
   std::vector<BindingSpec> bindings;
+  std::optional<FabricSpec> fabric;          ///< [fabric], expanded into fibers, bodies, tows
+  std::vector<TowSpec> tows;                 ///< [[tow]] (or generated from [fabric])
+  std::vector<std::vector<int>> weave;       ///< [weave] matrix (or from [fabric]); empty = none
   std::vector<StepSpec> steps;
   SolverSpec solver;
   ContactSpec contact;

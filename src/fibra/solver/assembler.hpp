@@ -4,6 +4,7 @@
 /// schedule (partitions of the matrix in parallel, then colours of straddling stencils), so
 /// sums are reproducible whatever the thread count.
 #include <Eigen/Core>
+#include <span>
 #include <vector>
 
 #include "fibra/solver/block_pattern.hpp"
@@ -20,50 +21,66 @@ struct AssemblyTarget {
   std::vector<double>* values = nullptr;           ///< upper CSC values; may be null
 };
 
-/// Scatters one local contribution over the groups `groups` (sizes from the pattern).
+/// Scatters one local contribution over the groups `groups` (sizes from the pattern). The
+/// Hessian goes column by column of the global matrix (for each column, the row blocks of
+/// every group at or above it), so both the local matrix (column-major) and the global CSC
+/// values are read and written in order; for a binding of 48 fiber ends this is 3-4 times
+/// faster than row-block order (bench/bench_bodies.cpp), with identical sums.
 template <class LocalVec, class LocalMat>
 void scatter_local(const AssemblyTarget& t, std::span<const Index> groups, const LocalVec* g, const LocalMat* h) {
   const BlockPattern& p = *t.pattern;
   const std::vector<char>& fixed = *t.fixed;
   const int* col_ptr = p.col_ptr().data();
-  int off_i = 0;
-  for (size_t i = 0; i < groups.size(); ++i) {
+  const size_t ng = groups.size();
+  if (g && t.gradient) {
+    int off = 0;
+    for (size_t i = 0; i < ng; ++i) {
+      const int si = p.group_size(groups[i]);
+      const Index di = p.group_dof(groups[i]);
+      for (int r = 0; r < si; ++r) (*t.gradient)[di + r] += (*g)[off + r];
+      off += si;
+    }
+  }
+  if (!(h && t.values)) return;
+  // Per stencil group: local offset, size, first dof, relative offset in the current column
+  // group (-1: below it), no fixed dof.
+  struct Slot {
+    int off, size;
+    Index dof;
+    int rel;
+    bool free;
+  };
+  thread_local std::vector<Slot> slots;
+  slots.resize(ng);
+  int off = 0;
+  for (size_t i = 0; i < ng; ++i) {
     const Index gi = groups[i];
-    const int si = p.group_size(gi);
-    const Index di = p.group_dof(gi);
-    if (g && t.gradient)
-      for (int r = 0; r < si; ++r) (*t.gradient)[di + r] += (*g)[off_i + r];
-    if (h && t.values) {
-      double* values = t.values->data();
-      const bool free_i = t.group_fixed && !(*t.group_fixed)[gi];
-      int off_j = 0;
-      for (size_t j = 0; j < groups.size(); ++j) {
-        const Index gj = groups[j];
-        const int sj = p.group_size(gj);
-        if (gi <= gj) {
-          const Index dj = p.group_dof(gj);
-          const int rel = p.relative_offset(gi, gj);
-          if (free_i && !(*t.group_fixed)[gj]) {
-            // No eliminated dof in either group: contiguous columns, no checks.
-            for (int c = 0; c < sj; ++c) {
-              double* dst = values + col_ptr[dj + c] + rel;
-              const int rmax = (gi == gj) ? c + 1 : si;
-              for (int r = 0; r < rmax; ++r) dst[r] += (*h)(off_i + r, off_j + c);
-            }
-          } else {
-            for (int c = 0; c < sj; ++c) {
-              if (fixed[dj + c]) continue;
-              double* dst = values + col_ptr[dj + c] + rel;
-              const int rmax = (gi == gj) ? c + 1 : si;
-              for (int r = 0; r < rmax; ++r)
-                if (!fixed[di + r]) dst[r] += (*h)(off_i + r, off_j + c);
-            }
-          }
+    slots[i] = {off, p.group_size(gi), p.group_dof(gi), 0, !t.group_fixed || !(*t.group_fixed)[gi]};
+    if (!t.group_fixed) slots[i].free = false;  // unknown: check every dof
+    off += slots[i].size;
+  }
+  double* values = t.values->data();
+  for (size_t j = 0; j < ng; ++j) {
+    const Index gj = groups[j];
+    const Slot& sj = slots[j];
+    for (size_t i = 0; i < ng; ++i) slots[i].rel = groups[i] <= gj ? p.relative_offset(groups[i], gj) : -1;
+    for (int c = 0; c < sj.size; ++c) {
+      const Index col = sj.dof + c;
+      if (!sj.free && fixed[col]) continue;
+      double* column = values + col_ptr[col];
+      for (size_t i = 0; i < ng; ++i) {
+        const Slot& si = slots[i];
+        if (si.rel < 0) continue;
+        const int rmax = groups[i] == gj ? c + 1 : si.size;
+        double* dst = column + si.rel;
+        if (si.free && sj.free) {
+          for (int r = 0; r < rmax; ++r) dst[r] += (*h)(si.off + r, sj.off + c);
+        } else {
+          for (int r = 0; r < rmax; ++r)
+            if (!fixed[si.dof + r]) dst[r] += (*h)(si.off + r, sj.off + c);
         }
-        off_j += sj;
       }
     }
-    off_i += si;
   }
 }
 

@@ -8,6 +8,7 @@
 #include <map>
 
 #include "fibra/core/error.hpp"
+#include "fibra/model/fabric.hpp"
 
 namespace fibra {
 
@@ -120,6 +121,18 @@ StaticSolver::StaticSolver(const Case& c, const Model& model)
         m_length_scale[9 * (f.first_node + k) + d] = r;
       }
   }
+  // Weaving: the tow (direction, index) of every fiber.
+  m_fiber_tow.assign(model.fibers.size(), {-1, -1});
+  for (size_t t = 0; t < c.tows.size(); ++t)
+    for (const std::string& name : c.tows[t].fibers) {
+      const int f = model.fiber_index(name);
+      if (f < 0) throw InputError(c.file, fmt::format("tow[{}].fibers", t), fmt::format("no fiber named \"{}\"", name));
+      m_fiber_tow[f] = {c.tows[t].direction == TowSpec::Direction::Warp ? 0 : 1, c.tows[t].index};
+    }
+  for (size_t s = 0; s < c.steps.size(); ++s)
+    if (c.steps[s].kind == StepSpec::Kind::Weave && (!c.contact.enabled || c.tows.empty() || c.weave.empty()))
+      throw InputError(c.file, fmt::format("step[{}].kind", s),
+                       "a weave step needs [contact], tows ([[tow]] or [fabric]) and a weave matrix ([weave] or [fabric])");
   if (c.contact.enabled) {
     m_contact = std::make_unique<ContactManager>(model, c.contact);
     double rmin = std::numeric_limits<double>::infinity();
@@ -164,12 +177,23 @@ std::vector<double> StaticSolver::reactions(const VecX& gradient) const {
   return out;
 }
 
+int StaticSolver::weave_side(int fa, int fb) const {
+  const auto [da, ia] = m_fiber_tow[fa];
+  const auto [db, ib] = m_fiber_tow[fb];
+  if (da < 0 || db < 0 || da == db) return 0;
+  const bool above = da == 0 ? warp_above(m_case.weave, ia, ib) : warp_above(m_case.weave, ib, ia);
+  // Normal from A towards B: +z when B is above A.
+  const bool b_above = da == 0 ? !above : above;
+  return b_above ? 1 : -1;
+}
+
 bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>& history, int& iterations,
                                    double& residual) {
   apply(step, lambda);
   m_contact_stats = ContactStats{};
   m_binding_updates = 0;
   if (!m_contact) return equilibrium(history, iterations, residual);
+  const bool weave = m_case.steps[step].kind == StepSpec::Kind::Weave;
 
   // METHOD §4: (1) contact elements, repeated while the set changes; (2) normals, repeated
   // while they turn; (3) Newton on the rest. A zone that penetrates too deep gets a stiffer
@@ -179,6 +203,14 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   auto detect = [&]() {
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<ContactElement> fresh = m_contact->detect(m_q, m_q_start, m_problem->contacts());
+    if (weave) {
+      // METHOD §6: contacts between crossing tows pushed to the pattern's side; the
+      // penetration found at the start of the step is released linearly over it.
+      auto rule = [this](int fa, int fb) { return weave_side(fa, fb); };
+      const double deepest = m_contact->prescribe_normals(fresh, m_q, Vec3::UnitZ(), rule, 0.0);
+      if (m_weave_depth < 0.0) m_weave_depth = deepest;
+      m_contact->prescribe_normals(fresh, m_q, Vec3::UnitZ(), rule, (1.0 - lambda) * m_weave_depth);
+    }
     ++m_contact_stats.detections;
     m_contact_stats.detection_time += seconds_since(t0);
     return fresh;
@@ -216,8 +248,9 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       if (contacts[k].fresh) same = m_contact->penetration_ratio({contacts[k]}, m_q) <= 0.0;
     same = same && m_contact->penetration_ratio(contacts, m_q) <= 1.0;
     if (same && raised == 0) {
-      // Fibers that went through each other within the increment: cut it.
-      if (m_contact->crossed(m_q_start, m_q)) return false;
+      // Fibers that went through each other within the increment: cut it (not while
+      // weaving, where crossing tows pass through each other by design).
+      if (!weave && m_contact->crossed(m_q_start, m_q)) return false;
       // Nothing changed since `responses` (same state, elements, normals and penalties).
       m_contact->add_stats(m_problem->contacts(), responses, m_contact_stats);
       m_contact_responses = responses;
@@ -232,7 +265,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     // between two detections); the increment is cut.
     if (m_problem->set_contacts(contacts, m_contact->friction())) m_linear->analyze(m_problem->pattern());
     const std::vector<ContactResponse> fresh_responses = m_problem->contact_responses(m_q);
-    if (m_contact->passed_through(m_problem->contacts(), fresh_responses)) return false;
+    if (!weave && m_contact->passed_through(m_problem->contacts(), fresh_responses)) return false;
     contacts = m_problem->contacts();
   }
   return false;
@@ -322,7 +355,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     FactorStatus st = m_linear->factorize(m_hessian, shift);
     ++m_stats.factorizations;
     while (st == FactorStatus::NotPositiveDefinite && shift < mean_diag) {
-      shift = shift == 0.0 ? 1e-10 * mean_diag : shift * 100.0;
+      shift = shift == 0.0 ? 1e-14 * mean_diag : shift * 100.0;
       st = m_linear->factorize(m_hessian, shift);
       ++m_stats.factorizations;
       ++m_stats.regularized_factorizations;
@@ -456,6 +489,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     }
     p.disp = disp;
 
+    m_weave_depth = -1.0;  // measured at the step's first detection
     const double nominal = 1.0 / st.increments;
     const int max_increments = st.max_increments > 0 ? st.max_increments : 100 * st.increments;
     double lambda = 0.0, dl = nominal;

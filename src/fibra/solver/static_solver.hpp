@@ -90,6 +90,9 @@ class StaticSolver {
   struct Program;  // resolved loads and displacements per step
   bool solve_increment(int step, double lambda, std::vector<double>& history, int& iterations, double& residual);
   bool newton(std::vector<double>& history, int& iterations, double& residual);
+  /// Weaving: +1 / -1 when the contact normal from fiber fa towards fiber fb must be +z / -z
+  /// (fibers of crossing tows, side from the weave matrix), 0 otherwise.
+  int weave_side(int fa, int fb) const;
   /// Newton, then augmented-Lagrangian updates of the binding multipliers until the binding
   /// conditions hold (each update followed by Newton again).
   bool equilibrium(std::vector<double>& history, int& iterations, double& residual);
@@ -115,6 +118,8 @@ class StaticSolver {
   std::vector<Index> m_reaction_nodes;
   int m_binding_updates = 0;  // in the current increment
   double m_max_step = 0;      // largest nodal motion per Newton iteration [m]; 0 = no limit
+  std::vector<std::pair<int, int>> m_fiber_tow;  // per fiber: (0 warp / 1 weft / -1 none, tow index)
+  double m_weave_depth = -1;  // penetration between crossing tows at the weave step's start [m]
   SolverStats m_stats;
   std::function<void(const std::string&)> m_progress;
 };

@@ -1,0 +1,362 @@
+#include "fibra/model/fabric.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <numbers>
+#include <numeric>
+#include <sstream>
+
+#include "fibra/core/error.hpp"
+
+namespace fibra {
+namespace {
+
+std::string lower_trimmed(const std::string& s) {
+  std::string out;
+  for (char ch : s) out += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  const auto b = out.find_first_not_of(" \t");
+  const auto e = out.find_last_not_of(" \t");
+  return b == std::string::npos ? std::string() : out.substr(b, e - b + 1);
+}
+
+/// Parses "A/B" or "A" into integers; false on anything else.
+bool parse_pair(const std::string& s, int& a, int& b, bool& has_b) {
+  std::istringstream in(s);
+  has_b = false;
+  if (!(in >> a)) return false;
+  char slash = 0;
+  if (in >> slash) {
+    if (slash != '/' || !(in >> b)) return false;
+    has_b = true;
+  }
+  std::string rest;
+  return !(in >> rest);
+}
+
+const char* kAccepted =
+    "accepted: \"plain\", \"twill A/B\" (e.g. \"twill 2/1\", \"twill 2/2\"), \"basket\" or \"basket N\", "
+    "\"satin N\" or \"satin N/M\", or give `matrix` instead";
+
+}  // namespace
+
+std::vector<std::vector<int>> named_weave(const std::string& pattern, std::string& error) {
+  error.clear();
+  const std::string p = lower_trimmed(pattern);
+  const auto space = p.find(' ');
+  const std::string word = p.substr(0, space);
+  const std::string args = space == std::string::npos ? std::string() : p.substr(space + 1);
+  std::vector<std::vector<int>> m;
+  int a = 0, b = 0;
+  bool has_b = false;
+  if (word == "plain" && args.empty()) return {{1, 0}, {0, 1}};
+  if (word == "twill") {
+    if (!parse_pair(args, a, b, has_b) || !has_b || a < 1 || b < 1) {
+      error = fmt::format("\"{}\": a twill is \"twill A/B\" with A, B >= 1 (e.g. \"twill 2/1\"); {}", pattern, kAccepted);
+      return {};
+    }
+    const int n = a + b;
+    m.assign(n, std::vector<int>(n, 0));
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) m[j][i] = ((i - j) % n + n) % n < a ? 1 : 0;
+    return m;
+  }
+  if (word == "basket") {
+    a = 2;
+    if (!args.empty() && (!parse_pair(args, a, b, has_b) || has_b || a < 1)) {
+      error = fmt::format("\"{}\": a basket is \"basket\" or \"basket N\" with N >= 1; {}", pattern, kAccepted);
+      return {};
+    }
+    const int n = 2 * a;
+    m.assign(n, std::vector<int>(n, 0));
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) m[j][i] = ((i / a) + (j / a)) % 2 == 0 ? 1 : 0;
+    return m;
+  }
+  if (word == "satin") {
+    if (!parse_pair(args, a, b, has_b) || a < 5) {
+      error = fmt::format("\"{}\": a satin is \"satin N\" or \"satin N/M\" with N >= 5; {}", pattern, kAccepted);
+      return {};
+    }
+    const int n = a;
+    int move = has_b ? b : 0;
+    if (!has_b)
+      for (int k = 2; k < n - 1 && move == 0; ++k)
+        if (std::gcd(k, n) == 1) move = k;
+    if (move <= 1 || move >= n - 1 || std::gcd(move, n) != 1) {
+      error = fmt::format("\"{}\": the move M of \"satin N/M\" must be coprime with N and 1 < M < N - 1", pattern);
+      return {};
+    }
+    m.assign(n, std::vector<int>(n, 1));
+    for (int j = 0; j < n; ++j) m[j][(move * j) % n] = 0;
+    return m;
+  }
+  error = fmt::format("unknown pattern \"{}\"; {}", pattern, kAccepted);
+  return {};
+}
+
+std::string check_weave(const std::vector<std::vector<int>>& matrix) {
+  if (matrix.empty() || matrix[0].empty()) return "the weave matrix is empty";
+  const size_t cols = matrix[0].size();
+  for (size_t j = 0; j < matrix.size(); ++j) {
+    if (matrix[j].size() != cols)
+      return fmt::format("the weave matrix is not rectangular: row {} has {} entries, row 0 has {}", j,
+                         matrix[j].size(), cols);
+    for (int v : matrix[j])
+      if (v != 0 && v != 1) return fmt::format("weave matrix entries must be 0 or 1 (row {} has {})", j, v);
+  }
+  for (size_t j = 0; j < matrix.size(); ++j) {
+    const int sum = std::accumulate(matrix[j].begin(), matrix[j].end(), 0);
+    if (sum == 0 || sum == static_cast<int>(cols))
+      return fmt::format("row {} (a weft) is {} every warp: it never interlaces (every row and column needs both 0 "
+                         "and 1)",
+                         j, sum == 0 ? "above" : "below");
+  }
+  for (size_t i = 0; i < cols; ++i) {
+    int sum = 0;
+    for (const auto& row : matrix) sum += row[i];
+    if (sum == 0 || sum == static_cast<int>(matrix.size()))
+      return fmt::format("column {} (a warp) is {} every weft: it never interlaces (every row and column needs both "
+                         "0 and 1)",
+                         i, sum == 0 ? "below" : "above");
+  }
+  return "";
+}
+
+namespace {
+
+/// Hexagonal lattice sites (spacing d, rows along the width; `phase` 0: a row through the
+/// centre, 1: the centre between two rows) whose disc of radius r lies in the ellipse.
+std::vector<Eigen::Vector2d> lattice_sites(double d, int phase, double r, double a, double b) {
+  std::vector<Eigen::Vector2d> out;
+  const double h = d * std::sqrt(3.0) / 2.0;
+  const int rows = static_cast<int>(std::ceil(b / h)) + 1;
+  const int cols = static_cast<int>(std::ceil(a / d)) + 1;
+  for (int k = -rows; k <= rows; ++k) {
+    const double y = (k + 0.5 * phase) * h;
+    const double shift = ((k % 2) + 2) % 2 == 1 ? 0.5 * d : 0.0;
+    for (int l = -cols; l <= cols; ++l) {
+      const double x = l * d + shift;
+      // The disc inside the ellipse: its boundary sampled finely (sag below 2e-4 r).
+      bool inside = true;
+      for (int s = 0; s < 96 && inside; ++s) {
+        const double t = 2.0 * std::numbers::pi * s / 96;
+        const double px = x + r * 1.0002 * std::cos(t), py = y + r * 1.0002 * std::sin(t);
+        inside = (px / a) * (px / a) + (py / b) * (py / b) <= 1.0;
+      }
+      if (inside) out.emplace_back(x, y);
+    }
+  }
+  return out;
+}
+
+bool collinear(const std::vector<Eigen::Vector2d>& p) {
+  if (p.size() < 3) return true;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& v : p) mean += v / static_cast<double>(p.size());
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (const auto& v : p) cov += (v - mean) * (v - mean).transpose();
+  const double det = cov.determinant(), tr = cov.trace();
+  return det <= 1e-10 * tr * tr;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector2d> pack_ellipse(int count, double r, double width, double thickness) {
+  const double a = 0.5 * width, b = 0.5 * thickness;
+  if (count <= 0 || r <= 0 || a < r || b < r) return {};
+  auto best_for = [&](double d) {
+    std::vector<Eigen::Vector2d> best;
+    for (int phase : {1, 0}) {
+      std::vector<Eigen::Vector2d> s = lattice_sites(d, phase, r, a, b);
+      if (static_cast<int>(s.size()) < count) continue;
+      std::stable_sort(s.begin(), s.end(), [&](const Eigen::Vector2d& p, const Eigen::Vector2d& q) {
+        return (p.x() / a) * (p.x() / a) + (p.y() / b) * (p.y() / b) < (q.x() / a) * (q.x() / a) + (q.y() / b) * (q.y() / b);
+      });
+      s.resize(count);
+      if (count >= 3 && collinear(s)) continue;
+      return s;
+    }
+    return best;
+  };
+  if (best_for(2.0 * r).empty()) return {};
+  // Largest spacing that still holds them (bisection; the count falls with the spacing).
+  double lo = 2.0 * r, hi = 2.0 * std::max(a, b) + 2.0 * r;
+  for (int it = 0; it < 60; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    if (best_for(mid).empty())
+      hi = mid;
+    else
+      lo = mid;
+  }
+  std::vector<Eigen::Vector2d> out = best_for(lo);
+  // Centre the packing on the section's axis.
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& v : out) mean += v / static_cast<double>(out.size());
+  (void)mean;  // sites are symmetric only approximately; the tow-end bodies sit at the actual centroid
+  return out;
+}
+
+void expand_fabric(Case& c) {
+  if (!c.fabric) return;
+  const FabricSpec& f = *c.fabric;
+  const std::string& file = c.file;
+  if (const std::string why = check_weave(f.matrix); !why.empty()) throw InputError(file, "fabric.pattern", why);
+
+  struct Direction {
+    const char* name;  // "warp" / "weft"
+    const FabricDirectionSpec* spec;
+    std::vector<Eigen::Vector2d> sites;
+  };
+  Direction dirs[2] = {{"warp", &f.warp, {}}, {"weft", &f.weft, {}}};
+  for (Direction& d : dirs) {
+    const FabricDirectionSpec& s = *d.spec;
+    const std::string key = fmt::format("fabric.{}", d.name);
+    if (s.tows < 1) throw InputError(file, key + ".tows", "a fabric needs at least one tow in each direction");
+    if (s.tow.fibers < 3)
+      throw InputError(file, key + ".tow.fibers",
+                       fmt::format("a tow needs at least 3 fibers (its end bodies follow them in average and need "
+                                   "3 not on one line to define a mean rotation), got {}",
+                                   s.tow.fibers));
+    if (s.tows > 1 && s.spacing < s.tow.width)
+      throw InputError(file, key + ".spacing",
+                       fmt::format("spacing {:.6g} m is smaller than the tow width {:.6g} m: neighbouring {} tows "
+                                   "would overlap",
+                                   s.spacing, s.tow.width, d.name));
+    d.sites = pack_ellipse(s.tow.fibers, s.fiber.radius, s.tow.width, s.tow.thickness);
+    if (d.sites.empty()) {
+      int fit = 0;
+      for (int n = 1; n <= 100000 && !pack_ellipse(n, s.fiber.radius, s.tow.width, s.tow.thickness).empty(); n *= 2)
+        fit = n;
+      int lo = fit, hi = std::max(1, 2 * fit);
+      while (hi - lo > 1) {
+        const int mid = (lo + hi) / 2;
+        (pack_ellipse(mid, s.fiber.radius, s.tow.width, s.tow.thickness).empty() ? hi : lo) = mid;
+      }
+      throw InputError(file, key + ".tow.fibers",
+                       fmt::format("{} fibers of radius {:.6g} m do not fit without overlap in the {:.6g} x {:.6g} m "
+                                   "elliptical section (at most {} do)",
+                                   s.tow.fibers, s.fiber.radius, s.tow.width, s.tow.thickness, lo));
+    }
+  }
+  const int nw = f.warp.tows, nf = f.weft.tows;
+  const double sw = f.warp.spacing, sf = f.weft.spacing;
+  // Warp i along x at y_i; weft j along y at x_j.
+  auto warp_y = [&](int i) { return (i - 0.5 * (nw - 1)) * sw; };
+  auto weft_x = [&](int j) { return (j - 0.5 * (nf - 1)) * sf; };
+  const double x0 = weft_x(0) - f.margin, x1 = weft_x(nf - 1) + f.margin;
+  const double y0 = warp_y(0) - f.margin, y1 = warp_y(nw - 1) + f.margin;
+
+  std::vector<std::string> edge_members[4];  // x-, x+, y-, y+
+  for (int dir = 0; dir < 2; ++dir) {
+    const Direction& d = dirs[dir];
+    const FabricDirectionSpec& s = *d.spec;
+    const int tows = dir == 0 ? nw : nf;
+    const double length = dir == 0 ? x1 - x0 : y1 - y0;
+    const int elements = std::max(2, static_cast<int>(std::ceil(length / s.fiber.element_length - 1e-9)));
+    for (int t = 0; t < tows; ++t) {
+      TowSpec tow;
+      tow.name = fmt::format("{}{}", d.name, t);
+      tow.direction = dir == 0 ? TowSpec::Direction::Warp : TowSpec::Direction::Weft;
+      tow.index = t;
+      Vec3 start_centroid = Vec3::Zero(), end_centroid = Vec3::Zero();
+      BindingSpec start_binding, end_binding;
+      start_binding.body = tow.name + ".start";
+      end_binding.body = tow.name + ".end";
+      for (size_t k = 0; k < d.sites.size(); ++k) {
+        const Eigen::Vector2d& p = d.sites[k];
+        FiberSpec fib;
+        fib.name = fmt::format("{}.f{}", tow.name, k);
+        fib.material = s.fiber.material;
+        fib.radius = s.fiber.radius;
+        fib.semi_axis_1 = fib.semi_axis_2 = s.fiber.radius;
+        fib.elements = elements;
+        fib.path.kind = PathSpec::Kind::Polyline;
+        Vec3 a, b;
+        if (dir == 0) {
+          a = Vec3(x0, warp_y(t) + p.x(), p.y());
+          b = Vec3(x1, warp_y(t) + p.x(), p.y());
+          fib.section_direction = Vec3::UnitY();
+        } else {
+          a = Vec3(weft_x(t) + p.x(), y0, p.y());
+          b = Vec3(weft_x(t) + p.x(), y1, p.y());
+          fib.section_direction = Vec3::UnitX();
+        }
+        fib.path.points = {a, b};
+        start_centroid += a / static_cast<double>(d.sites.size());
+        end_centroid += b / static_cast<double>(d.sites.size());
+        NodeRef first{fib.name, NodeRef::Kind::First}, last{fib.name, NodeRef::Kind::Last};
+        start_binding.ends.push_back(first);
+        end_binding.ends.push_back(last);
+        tow.fibers.push_back(fib.name);
+        c.fibers.push_back(std::move(fib));
+      }
+      c.bodies.push_back({tow.name + ".start", start_centroid, Mat3::Identity()});
+      c.bodies.push_back({tow.name + ".end", end_centroid, Mat3::Identity()});
+      start_binding.line = static_cast<int>(c.bindings.size());
+      c.bindings.push_back(std::move(start_binding));
+      end_binding.line = static_cast<int>(c.bindings.size());
+      c.bindings.push_back(std::move(end_binding));
+      edge_members[2 * dir].push_back(tow.name + ".start");
+      edge_members[2 * dir + 1].push_back(tow.name + ".end");
+      c.tows.push_back(std::move(tow));
+    }
+  }
+  const char* edge_names[4] = {"edge.x-", "edge.x+", "edge.y-", "edge.y+"};
+  for (int e = 0; e < 4; ++e) {
+    Vec3 centre = Vec3::Zero();
+    for (const std::string& m : edge_members[e])
+      for (const BodySpec& b : c.bodies)
+        if (b.name == m) centre += b.center / static_cast<double>(edge_members[e].size());
+    c.bodies.push_back({edge_names[e], centre, Mat3::Identity()});
+    BindingSpec bind;
+    bind.body = edge_names[e];
+    bind.bodies = edge_members[e];
+    bind.line = static_cast<int>(c.bindings.size());
+    c.bindings.push_back(std::move(bind));
+  }
+  c.weave = f.matrix;
+
+  // Edge conditions, in the first step unless the user set them: the x- and y- edges held;
+  // the x+ and y+ edges free to draw in along their tows under a small tension, held
+  // otherwise (the fabric's mid-plane stays at z = 0, no edge turns).
+  if (!c.steps.empty()) {
+    auto listed = [&](const std::string& name) {
+      for (const StepSpec& st : c.steps)
+        for (const BodyStepSpec& b : st.bodies)
+          if (b.name == name) return true;
+      return false;
+    };
+    double tension_w = f.tension, tension_f = f.tension;
+    for (const MaterialSpec& m : c.materials) {
+      const double strain = 1e-4;  // default: the tension that strains a fiber by 1e-4
+      if (f.tension <= 0 && m.name == f.warp.fiber.material)
+        tension_w = strain * m.young * std::numbers::pi * f.warp.fiber.radius * f.warp.fiber.radius;
+      if (f.tension <= 0 && m.name == f.weft.fiber.material)
+        tension_f = strain * m.young * std::numbers::pi * f.weft.fiber.radius * f.weft.fiber.radius;
+    }
+    const double fw = tension_w * nw * static_cast<double>(dirs[0].sites.size());
+    const double ff = tension_f * nf * static_cast<double>(dirs[1].sites.size());
+    StepSpec& first = c.steps.front();
+    for (int e = 0; e < 4; ++e) {
+      if (listed(edge_names[e])) continue;
+      BodyStepSpec b;
+      b.name = edge_names[e];
+      b.has_displacement = b.has_rotation = true;
+      b.displacement = {0.0, 0.0, 0.0};
+      b.rotation = {0.0, 0.0, 0.0};
+      if (e == 1) {
+        b.displacement[0].reset();
+        b.force = Vec3(fw, 0, 0);
+      } else if (e == 3) {
+        b.displacement[1].reset();
+        b.force = Vec3(0, ff, 0);
+      }
+      first.bodies.push_back(b);
+    }
+  }
+}
+
+}  // namespace fibra
