@@ -75,6 +75,7 @@ class ContactManager {
   FrictionParams friction() const { return m_friction; }
   const ContactSpec& spec() const { return m_spec; }  ///< settings
   int zones() const { return m_zones; }               ///< zones of the last detection
+  double initial_stiffness() const { return m_initial_stiffness; }  ///< initial penalty [N/m]
 
  private:
   double pair_radius(const ContactElement& c) const;  // smaller section radius of the pair

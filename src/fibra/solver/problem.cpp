@@ -29,6 +29,10 @@ Problem::Problem(const Model& model, BodySystem* bodies)
       m_fixed(model.num_dofs(), 0),
       m_forces(VecX::Zero(model.num_dofs())) {
   build_pattern();
+  m_node_r2.assign(model.num_nodes(), 0.0);
+  for (const Fiber& f : model.fibers)
+    for (Index k = 0; k < f.num_nodes; ++k)
+      m_node_r2[f.first_node + k] = model.sections[f.section].a * model.sections[f.section].b;
 }
 
 void Problem::build_pattern() {
@@ -121,6 +125,19 @@ double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hes
 
   // Averaged bindings of rigid bodies (augmented Lagrangian), sequential.
   if (m_bodies) energy += m_bodies->evaluate(q, target, gradient != nullptr, hessian != nullptr);
+
+  // Drag towards the anchor (weave steps): a diagonal term on every node dof.
+  if (m_drag > 0.0) {
+    for (Index n = 0; n < model.num_nodes(); ++n)
+      for (int d = 0; d < kNodeDofs; ++d) {
+        const Index dof = kNodeDofs * n + d;
+        const double c = d < 3 ? m_drag : m_drag * m_node_r2[n];
+        const double u = q[dof] - m_drag_anchor[dof];
+        energy += 0.5 * c * u * u;
+        if (gradient) (*gradient)[dof] += c * u;
+        if (hessian && !m_fixed[dof]) (*hessian)[m_diagonal[dof]] += c;
+      }
+  }
 
   // Dead forces: potential -f . (q - q_ref) (for a body's rotation dofs, the work of a moment
   // over the increment's rotation vector).

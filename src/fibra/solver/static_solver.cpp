@@ -194,6 +194,13 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   m_binding_updates = 0;
   if (!m_contact) return equilibrium(history, iterations, residual);
   const bool weave = m_case.steps[step].kind == StepSpec::Kind::Weave;
+  // Weaving is a pseudo-time process: a drag towards the increment's start (stiffness per
+  // node a multiple of the contact penalty) keeps each increment well posed while loose
+  // fibers are pushed through their crossing partners; the relax step removes it.
+  m_problem->set_drag(weave ? m_case.solver.weave_drag * m_contact->initial_stiffness() : 0.0, m_q_start);
+  // Relax steps (after weaving, fibers only held by contact): a vanishing proximal drag.
+  m_proximal = m_case.steps[step].kind == StepSpec::Kind::Relax && m_case.solver.relax_drag > 0.0;
+  m_proximal_drag = m_case.solver.relax_drag * m_contact->initial_stiffness();
 
   // METHOD §4: (1) contact elements, repeated while the set changes; (2) normals, repeated
   // while they turn; (3) Newton on the rest. A zone that penetrates too deep gets a stiffer
@@ -205,11 +212,12 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     std::vector<ContactElement> fresh = m_contact->detect(m_q, m_q_start, m_problem->contacts());
     if (weave) {
       // METHOD §6: contacts between crossing tows pushed to the pattern's side; the
-      // penetration found at the start of the step is released linearly over it.
+      // penetration found at the start of the step is released linearly.
       auto rule = [this](int fa, int fb) { return weave_side(fa, fb); };
       const double deepest = m_contact->prescribe_normals(fresh, m_q, Vec3::UnitZ(), rule, 0.0);
       if (m_weave_depth < 0.0) m_weave_depth = deepest;
-      m_contact->prescribe_normals(fresh, m_q, Vec3::UnitZ(), rule, (1.0 - lambda) * m_weave_depth);
+      // Released over the first half of the step; the second half settles.
+      m_contact->prescribe_normals(fresh, m_q, Vec3::UnitZ(), rule, std::max(0.0, 1.0 - 2.0 * lambda) * m_weave_depth);
     }
     ++m_contact_stats.detections;
     m_contact_stats.detection_time += seconds_since(t0);
@@ -243,10 +251,12 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     contacts = detect();
     // Consistent: no new element would carry force (the new ones do not penetrate) and the
     // fresh set sees no penetration beyond the cap.
+    // While weaving, the fresh elements wait for the next increment (the drag keeps the
+    // motion per increment small).
     bool same = true;
-    for (size_t k = 0; same && k < contacts.size(); ++k)
+    for (size_t k = 0; !weave && same && k < contacts.size(); ++k)
       if (contacts[k].fresh) same = m_contact->penetration_ratio({contacts[k]}, m_q) <= 0.0;
-    same = same && m_contact->penetration_ratio(contacts, m_q) <= 1.0;
+    same = weave || (same && m_contact->penetration_ratio(contacts, m_q) <= 1.0);
     if (same && raised == 0) {
       // Fibers that went through each other within the increment: cut it (not while
       // weaving, where crossing tows pass through each other by design).
@@ -274,23 +284,40 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
 bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, double& residual) {
   iterations = 0;
   const double tolerance = m_case.solver.binding_tolerance * m_model.length_scale;
+  const double settle = m_case.solver.displacement_tolerance * m_model.length_scale;
   if (m_bodies) m_bodies->set_anchors(m_q);
+  if (m_proximal) m_problem->set_drag(m_proximal_drag, m_q);
   for (int update = 0;; ++update) {
     int its = 0;
     const bool ok = newton(history, its, residual);
     iterations += its;
     if (!ok) return false;
-    if (!m_bodies) return true;
-    // Augmented Lagrangian: conditions within the tolerance; proximal anchors: no member moved
-    // more than the tolerance since they were set (their springs' force is then negligible).
-    const bool satisfied = m_bodies->violation(m_q) <= tolerance;
-    const bool settled = m_bodies->anchor_drift(m_q) <= tolerance;
-    if (satisfied && settled) return true;
+    // Proximal drag (relax steps): the anchor follows the solution until it no longer moves,
+    // so the drag's force vanishes at convergence (a proximal-point iteration).
+    bool settled = true;
+    if (m_proximal) {
+      double drift = 0.0;
+      const VecX& anchor = m_problem->drag_anchor();
+      for (Index d = 0; d < m_model.node_dofs; ++d) drift = std::max(drift, std::abs(m_q[d] - anchor[d]) * m_length_scale[d]);
+      settled = drift <= settle;
+      if (!settled) m_problem->set_drag(m_proximal_drag, m_q);
+    }
+    if (m_bodies) {
+      // Augmented Lagrangian: conditions within the tolerance; proximal anchors: no member
+      // moved more than the tolerance since they were set (their springs' force is then
+      // negligible).
+      const bool satisfied = m_bodies->violation(m_q) <= tolerance;
+      const bool anchored = m_bodies->anchor_drift(m_q) <= tolerance;
+      if (!satisfied) m_bodies->update_multipliers(m_q);
+      if (!anchored || !satisfied) {
+        m_bodies->set_anchors(m_q);
+        settled = false;
+        ++m_binding_updates;
+        ++m_stats.binding_updates;
+      }
+    }
+    if (settled) return true;
     if (update >= m_case.solver.max_binding_updates) return false;
-    if (!satisfied) m_bodies->update_multipliers(m_q);
-    m_bodies->set_anchors(m_q);
-    ++m_binding_updates;
-    ++m_stats.binding_updates;
   }
 }
 

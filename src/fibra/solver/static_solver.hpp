@@ -119,7 +119,9 @@ class StaticSolver {
   int m_binding_updates = 0;  // in the current increment
   double m_max_step = 0;      // largest nodal motion per Newton iteration [m]; 0 = no limit
   std::vector<std::pair<int, int>> m_fiber_tow;  // per fiber: (0 warp / 1 weft / -1 none, tow index)
-  double m_weave_depth = -1;  // penetration between crossing tows at the weave step's start [m]
+  double m_weave_depth = -1;
+  bool m_proximal = false;     // relax step: proximal drag loop in equilibrium()
+  double m_proximal_drag = 0;  // its stiffness per node [N/m]  // penetration between crossing tows at the weave step's start [m]
   SolverStats m_stats;
   std::function<void(const std::string&)> m_progress;
 };
