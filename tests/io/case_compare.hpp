@@ -188,6 +188,8 @@ inline void expect_same_case(const Case& a, const Case& b, bool compare_fabric =
   expect_same_double(s.binding_tolerance, t.binding_tolerance, "solver.binding_tolerance");
   EXPECT_EQ(s.max_binding_updates, t.max_binding_updates);
   expect_same_double(s.binding_stiffness, t.binding_stiffness, "solver.binding_stiffness");
+  expect_same_double(s.weave_drag, t.weave_drag, "solver.weave_drag");
+  expect_same_double(s.relax_drag, t.relax_drag, "solver.relax_drag");
 
   const ContactSpec& p = a.contact;
   const ContactSpec& q = b.contact;

@@ -1530,7 +1530,7 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   check_keys(t, path,
              {"residual_tolerance", "displacement_tolerance", "max_iterations", "max_cuts",
               "line_search", "linear_solver", "ordering", "binding_tolerance", "max_binding_updates",
-              "binding_stiffness", "max_step"});
+              "binding_stiffness", "max_step", "weave_drag", "relax_drag"});
   SolverSpec s;
   if (const Value* v = find(t, "residual_tolerance")) {
     s.residual_tolerance = positive(*v, join(path, "residual_tolerance"));
@@ -1576,6 +1576,14 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
     s.binding_stiffness = to_number(*v, key);
     if (!(s.binding_stiffness >= 0)) {
       fail(key, fmt::format("expected a number >= 0 (0 = automatic), got {}", s.binding_stiffness), v);
+    }
+  }
+  for (const char* name : {"weave_drag", "relax_drag"}) {
+    if (const Value* v = find(t, name)) {
+      const std::string key = join(path, name);
+      const double x = to_number(*v, key);
+      if (!(x >= 0)) fail(key, fmt::format("expected a number >= 0 (relative to the contact penalty), got {}", x), v);
+      (std::string(name) == "weave_drag" ? s.weave_drag : s.relax_drag) = x;
     }
   }
   if (const Value* v = find(t, "max_step")) {

@@ -287,6 +287,8 @@ void write_solver(std::string& out, const SolverSpec& s) {
   out += fmt::format("binding_tolerance = {}\n", number(s.binding_tolerance));
   out += fmt::format("max_binding_updates = {}\n", s.max_binding_updates);
   out += fmt::format("binding_stiffness = {}\n", number(s.binding_stiffness));
+  out += fmt::format("weave_drag = {}\n", number(s.weave_drag));
+  out += fmt::format("relax_drag = {}\n", number(s.relax_drag));
 }
 
 void write_contact(std::string& out, const ContactSpec& c) {

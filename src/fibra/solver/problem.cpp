@@ -137,6 +137,16 @@ double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hes
         if (gradient) (*gradient)[dof] += c * u;
         if (hessian && !m_fixed[dof]) (*hessian)[m_diagonal[dof]] += c;
       }
+    // Bodies too (their rotations scaled by their size).
+    for (Index b = 0; m_bodies && b < m_bodies->num_bodies(); ++b)
+      for (int d = 0; d < 6; ++d) {
+        const Index dof = model.bodies[b].first_dof + d;
+        const double c = d < 3 ? m_drag : m_drag * m_bodies->size(b) * m_bodies->size(b);
+        const double u = q[dof] - m_drag_anchor[dof];
+        energy += 0.5 * c * u * u;
+        if (gradient) (*gradient)[dof] += c * u;
+        if (hessian && !m_fixed[dof]) (*hessian)[m_diagonal[dof]] += c;
+      }
   }
 
   // Dead forces: potential -f . (q - q_ref) (for a body's rotation dofs, the work of a moment

@@ -298,7 +298,7 @@ bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, do
     if (m_proximal) {
       double drift = 0.0;
       const VecX& anchor = m_problem->drag_anchor();
-      for (Index d = 0; d < m_model.node_dofs; ++d) drift = std::max(drift, std::abs(m_q[d] - anchor[d]) * m_length_scale[d]);
+      for (Index d = 0; d < m_q.size(); ++d) drift = std::max(drift, std::abs(m_q[d] - anchor[d]) * m_length_scale[d]);
       settled = drift <= settle;
       if (!settled) m_problem->set_drag(m_proximal_drag, m_q);
     }
@@ -444,8 +444,9 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
         worst = d;
       }
     if (std::getenv("FIBRA_DEBUG_NEWTON"))
-      fmt::print(stderr, "  it {:2d} residual {:.3e} shift {:.2e} alpha {:.3f} step {:.3e} at dof {} (group {})\n", iterations,
-                 residual, shift, alpha, last_step, worst, m_problem->pattern().group_of_dof(worst));
+      fmt::print(stderr, "  it {:2d} residual {:.3e} shift {:.2e} alpha {:.3f} step {:.3e} at dof {} (group {}) drag {:.2e}\n",
+                 iterations, residual, shift, alpha, last_step, worst, m_problem->pattern().group_of_dof(worst),
+                 m_problem->drag());
   }
 }
 
