@@ -1,15 +1,24 @@
-// fibra: command-line program. Parses arguments, validates the case, runs it, reports.
+// fibra: command-line program. Parses arguments, validates the case, runs it, reports;
+// writes the generated assembly of a case (generate) and slices of a run's result (slice).
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <charconv>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fmt/format.h>
+#include <fstream>
 
+#include "fibra/body/bodies.hpp"
 #include "fibra/core/error.hpp"
 #include "fibra/io/case_reader.hpp"
+#include "fibra/io/case_writer.hpp"
+#include "fibra/io/output_writer.hpp"
+#include "fibra/io/slice.hpp"
+#include "fibra/model/fabric_report.hpp"
 #include "fibra/model/model.hpp"
 #include "fibra/run/run_case.hpp"
 #include "fibra/solver/static_solver.hpp"
@@ -58,6 +67,175 @@ int run(const std::string& path, std::string out, int threads) {
   return r.result.status == fibra::RunResult::Status::Interrupted ? 130 : 1;
 }
 
+namespace fs = std::filesystem;
+
+/// A plane of a slice: p[axis] = value.
+struct Plane {
+  int axis = 0;
+  double value = 0;
+  std::string text;  ///< as given, for messages
+};
+
+/// Parses "x=0.5e-3" (axis x, y or z; the value in metres).
+Plane parse_plane(const std::string& text) {
+  auto fail = [&] {
+    throw fibra::InputError("fibra slice", "--plane",
+                            fmt::format("expected AXIS=VALUE with AXIS x, y or z and VALUE a position in metres "
+                                        "(e.g. --plane x=0.5e-3), got \"{}\"",
+                                        text));
+  };
+  const size_t eq = text.find('=');
+  if (eq == std::string::npos) fail();
+  auto trim = [](std::string s) {
+    s.erase(0, s.find_first_not_of(" \t"));
+    s.erase(s.find_last_not_of(" \t") + 1);
+    return s;
+  };
+  const std::string axis = trim(text.substr(0, eq)), value = trim(text.substr(eq + 1));
+  Plane p;
+  p.text = text;
+  if (axis == "x" || axis == "X") p.axis = 0;
+  else if (axis == "y" || axis == "Y") p.axis = 1;
+  else if (axis == "z" || axis == "Z") p.axis = 2;
+  else fail();
+  const char* begin = value.data();
+  if (!value.empty() && value[0] == '+') ++begin;
+  const auto [end, ec] = std::from_chars(begin, value.data() + value.size(), p.value);
+  if (value.empty() || ec != std::errc() || end != value.data() + value.size() || !std::isfinite(p.value)) fail();
+  return p;
+}
+
+/// "x from A to B, y from ..., z from ... m": where the fibers' centroid lines are.
+std::string describe_bounds(const Eigen::AlignedBox3d& box) {
+  return fmt::format("the fibers' centroid lines span x from {:.4g} to {:.4g}, y from {:.4g} to {:.4g}, "
+                     "z from {:.4g} to {:.4g} m",
+                     box.min().x(), box.max().x(), box.min().y(), box.max().y(), box.min().z(), box.max().z());
+}
+
+/// The plane's position in a file name: 6 significant digits, no "-0".
+std::string value_label(double value) { return fmt::format("{:.6g}", value == 0 ? 0.0 : value); }
+
+/// File stem of a slice: DIR/slice_x_0.0005.
+std::string slice_stem(const fs::path& dir, int axis, double value) {
+  return (dir / fmt::format("slice_{}_{}", fibra::slice_axis_name(axis), value_label(value))).string();
+}
+
+int generate(const std::string& path, std::string out) {
+  const fibra::Case c = fibra::read_case(path);
+  const std::string stem = fs::path(path).stem().string();
+  if (out.empty()) out = stem + "_generated";
+  const fibra::Model model = fibra::build_model(c);
+  // Checks the case as `check` and `run` do (every node reference, the bindings); its bodies
+  // give the members' positions for bodies.pvd.
+  const fibra::StaticSolver solver(c, model);
+  const fibra::BodySystem* bodies = solver.bodies();
+
+  std::vector<std::string> files;
+  {
+    // The ParaView views of the starting assembly (the writer creates the directory).
+    fibra::OutputWriter writer(out, model, {}, c.output.tube_sides);
+    std::vector<fibra::BodyPoint> points;
+    if (bodies)
+      for (fibra::Index b = 0; b < bodies->num_bodies(); ++b)
+        points.push_back({model.bodies[b].name, model.bodies[b].center, model.bodies[b].axes, fibra::Vec3::Zero(),
+                          fibra::Vec3::Zero(), fibra::Vec3::Zero(), fibra::Vec3::Zero(),
+                          bodies->member_positions(b, model.reference)});
+    writer.write_increment(model.reference, fibra::HistoryRow{"initial", -1, 0, 0.0, 0, 0.0, 0.0, {}}, 0.0, true,
+                           nullptr, bodies ? &points : nullptr);
+  }
+  std::error_code ec;
+  fs::remove(fs::path(out) / "history.csv", ec);  // no history: nothing was run
+  files.push_back("fibers.pvd");
+  files.push_back("lines.pvd");
+  if (bodies) files.push_back("bodies.pvd");
+
+  // The case file: the generated assembly as plain fibers, bodies, bindings, tows, weave.
+  const fs::path case_file = fs::path(out) / (stem + ".toml");
+  {
+    const std::string text = fibra::write_case_toml(c);
+    std::ofstream f(case_file, std::ios::binary);
+    f << text;
+    f.close();
+    if (!f) throw fibra::RunError(fmt::format("cannot write '{}'", case_file.string()));
+  }
+  files.insert(files.begin(), case_file.filename().string());
+
+  // A slice across the middle of the sample in x and in y: with tows, where the run draws its
+  // slices (half-way between the two middle tow axes of the other direction, see
+  // fibra::fabric_report), else the middle of the fibers' bounding box.
+  const Eigen::AlignedBox3d box = fibra::centroid_bounds(model, model.reference);
+  double middle[2] = {box.center().x(), box.center().y()};
+  bool has[2] = {false, false};  // warp, weft tows
+  for (const fibra::TowSpec& t : c.tows) has[t.direction == fibra::TowSpec::Direction::Warp ? 0 : 1] = true;
+  if (has[0] || has[1]) {
+    const fibra::FabricReport rep = fibra::fabric_report(c, model, model.reference);
+    if (has[1] && std::isfinite(rep.section_x)) middle[0] = rep.section_x;  // between weft axes
+    if (has[0] && std::isfinite(rep.section_y)) middle[1] = rep.section_y;  // between warp axes
+  }
+  const std::string title = c.title.empty() ? stem + " (generated)" : c.title;
+  for (int axis = 0; axis < 2; ++axis) {
+    const double value = std::abs(middle[axis]) < 1e-12 * model.length_scale ? 0.0 : middle[axis];  // no 1e-19
+    const std::vector<fibra::SliceCut> cuts = fibra::slice_cuts(model, model.reference, c.tows, axis, value);
+    if (cuts.empty()) {
+      fmt::print("note: the plane {} = {:.6g} mm cuts no fiber: no slice written\n", fibra::slice_axis_name(axis),
+                 1e3 * value);
+      continue;
+    }
+    const std::string s = (fs::path(out) / "slices" / fmt::format("slice_{}", fibra::slice_axis_name(axis))).string();
+    fibra::write_slice(s, cuts, c.tows, axis, value, title);
+    const std::string rel = fs::path(s).lexically_relative(out).string();
+    files.push_back(rel + ".svg");
+    files.push_back(fmt::format("{}.png ({} = {:.6g} mm)", rel, fibra::slice_axis_name(axis), 1e3 * value));
+  }
+  fmt::print("{}: generated: {} fibers, {} nodes, {} dofs, {} bodies, {} tows\n", path, model.fibers.size(),
+             model.num_nodes(), model.num_dofs(), model.bodies.size(), c.tows.size());
+  fmt::print("files in {}/: {}\n", out, fmt::join(files, ", "));
+  return 0;
+}
+
+int slice(const std::string& dir, const std::vector<std::string>& plane_texts, const std::string& out) {
+  std::vector<Plane> planes;
+  for (const std::string& t : plane_texts) planes.push_back(parse_plane(t));
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec))
+    throw fibra::InputError(dir, "(directory)",
+                            fs::exists(dir, ec) ? "not a directory: expected the output directory of `fibra run`"
+                                                : "no such directory: expected the output directory of `fibra run`");
+  const fs::path case_file = fs::path(dir) / "case.toml", nodes_file = fs::path(dir) / "nodes.csv";
+  for (const fs::path& f : {case_file, nodes_file})
+    if (!fs::is_regular_file(f, ec))
+      throw fibra::InputError(f.string(), "(file)",
+                              fmt::format("not found: `fibra slice` reads the case.toml and nodes.csv that "
+                                          "`fibra run` writes into its output directory"));
+  const fibra::Case c = fibra::read_case(case_file.string());
+  const fibra::Model model = fibra::build_model(c);
+  const fibra::VecX q = fibra::read_nodes_csv(nodes_file.string(), model);
+
+  // Every plane is checked before anything is written.
+  const Eigen::AlignedBox3d box = fibra::centroid_bounds(model, q);
+  std::vector<std::vector<fibra::SliceCut>> cuts;
+  for (const Plane& p : planes) {
+    cuts.push_back(fibra::slice_cuts(model, q, c.tows, p.axis, p.value));
+    if (cuts.back().empty())
+      throw fibra::InputError("fibra slice", "--plane " + p.text, "the plane cuts no fiber: " + describe_bounds(box));
+  }
+  const std::string title = c.title.empty() ? fs::path(dir).filename().string() : c.title;
+  for (size_t k = 0; k < planes.size(); ++k) {
+    const Plane& p = planes[k];
+    std::string stem;
+    if (out.empty())
+      stem = slice_stem(fs::path(dir) / "slices", p.axis, p.value);
+    else if (planes.size() == 1)
+      stem = out;
+    else
+      stem = fmt::format("{}_{}_{}", out, fibra::slice_axis_name(p.axis), value_label(p.value));
+    const int fibers = fibra::write_slice(stem, cuts[k], c.tows, p.axis, p.value, title);
+    fmt::print("slice {} = {:g}: {} fibers cut ({} polygons): {}.svg, {}.png\n", fibra::slice_axis_name(p.axis),
+               p.value, fibers, cuts[k].size(), stem, stem);
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -77,9 +255,25 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--threads", threads, "OpenMP threads (default: all cores)")->check(CLI::NonNegativeNumber);
   auto* check_cmd = app.add_subcommand("check", "validate a case file without running it");
   check_cmd->add_option("case", case_path, "case file")->required();
+  auto* generate_cmd = app.add_subcommand(
+      "generate", "write the assembly a case generates (a [fabric] expanded) as a plain case file, with its "
+                  "ParaView views and slices");
+  generate_cmd->add_option("case", case_path, "case file")->required();
+  generate_cmd->add_option("--out", out, "output directory (default <case file stem>_generated)");
+  std::string result_dir;
+  std::vector<std::string> planes;
+  auto* slice_cmd = app.add_subcommand("slice", "draw the cut of a run's final state by planes (SVG and PNG)");
+  slice_cmd->add_option("result", result_dir, "output directory of `fibra run` (holds case.toml and nodes.csv)")
+      ->required();
+  slice_cmd->add_option("--plane", planes, "a plane AXIS=VALUE, e.g. x=0.5e-3 (metres; repeat for several)")
+      ->required()
+      ->allow_extra_args(false);
+  slice_cmd->add_option("--out", out, "file stem (default RESULT/slices/slice_<axis>_<value>)");
   CLI11_PARSE(app, argc, argv);
   try {
     if (*run_cmd) return run(case_path, out, threads);
+    if (*generate_cmd) return generate(case_path, out);
+    if (*slice_cmd) return slice(result_dir, planes, out);
     return check(case_path);
   } catch (const fibra::InputError& e) {
     fmt::print(stderr, "error: {}\n", e.what());

@@ -16,6 +16,8 @@
 #include <vector>
 
 #include "fibra/io/case_reader.hpp"
+#include "fibra/io/case_writer.hpp"
+#include "io/case_compare.hpp"
 
 namespace fibra {
 namespace {
@@ -312,6 +314,262 @@ TEST_F(Cli, CheckRejectsABodyWithoutMembers) {
   EXPECT_NE(r.err.find("body[1]"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("spare"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("has no members"), std::string::npos) << r.err;
+}
+
+// ------------------------------------------------------------------------------------------
+// fibra generate (the assembly a [fabric] generates, as a plain case file, its ParaView views
+// and slices) and fibra slice (slices of a run's final state).
+
+/// A small fabric: 2 x 2 tows of 3 fibers, 2 elements per fiber.
+const std::string kSmallFabric = R"(
+title = "Small fabric"
+
+[[material]]
+name = "glass"
+young = 72e9
+poisson = 0.22
+
+[fabric]
+pattern = "plain"
+warp = { tows = 2, spacing = 1.0e-3 }
+weft = { tows = 2, spacing = 1.0e-3 }
+
+  [fabric.tow]
+  fibers = 3
+  width = 0.8e-3
+  thickness = 0.2e-3
+
+  [fabric.fiber]
+  radius = 2.0e-5
+  material = "glass"
+  element_length = 1.0e-3
+
+[[step]]
+name = "weave"
+kind = "weave"
+increments = 5
+
+[[step]]
+name = "relax"
+kind = "relax"
+
+[contact]
+friction = 0.2
+)";
+
+bool is_png(const fs::path& p) {
+  const std::string s = slurp(p);
+  return s.size() > 8 && s.compare(0, 8, std::string("\x89PNG\r\n\x1a\n", 8)) == 0 &&
+         s.find("IEND") == s.size() - 8;
+}
+
+TEST_F(Cli, GenerateWritesThePlainCaseItsViewsAndSlices) {
+  write("fabric.toml", kSmallFabric);
+  const Result r = fibra("generate fabric.toml");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("12 fibers"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("4 tows"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("fabric_generated"), std::string::npos) << r.out;
+  const fs::path dir = m_dir / "fabric_generated";
+  for (const char* name : {"fabric.toml", "fibers.pvd", "lines.pvd", "bodies.pvd", "fibers_000000.vtu",
+                           "lines_000000.vtu", "bodies_000000.vtu", "slices/slice_x.svg", "slices/slice_y.svg"})
+    EXPECT_TRUE(fs::is_regular_file(dir / name)) << name << "\n" << r.out;
+  EXPECT_FALSE(fs::exists(dir / "history.csv"));  // nothing was run
+  EXPECT_FALSE(fs::exists(dir / "fibers_000001.vtu"));
+  for (const char* name : {"slices/slice_x.png", "slices/slice_y.png"}) EXPECT_TRUE(is_png(dir / name)) << name;
+  // The middle slices: x = 0 (between the wefts) cuts the 6 warp fibers, y = 0 the 6 weft fibers.
+  EXPECT_NE(r.out.find("slices/slice_x.png (x = 0 mm)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("slices/slice_y.png (y = 0 mm)"), std::string::npos) << r.out;
+  const std::string svg_x = slurp(dir / "slices" / "slice_x.svg"), svg_y = slurp(dir / "slices" / "slice_y.svg");
+  EXPECT_NE(svg_x.find("6 fibers cut"), std::string::npos);
+  EXPECT_NE(svg_x.find("data-fiber=\"warp1.f2\""), std::string::npos);
+  EXPECT_EQ(svg_x.find("data-fiber=\"weft"), std::string::npos);
+  EXPECT_NE(svg_y.find("data-fiber=\"weft0.f0\""), std::string::npos);
+  // The bodies' view holds each body and its members: 4 + 8 bodies, each with members.
+  EXPECT_NE(slurp(dir / "bodies_000000.vtu").find("NumberOfPoints"), std::string::npos);
+
+  // The written case is a plain case that check accepts and that reads back to the same
+  // fibers, bodies, bindings, tows and weave.
+  const std::string text = slurp(dir / "fabric.toml");
+  EXPECT_EQ(text.find("[fabric]"), std::string::npos);
+  const Result check = fibra("check fabric_generated/fabric.toml");
+  EXPECT_EQ(check.code, 0) << check.err;
+  EXPECT_NE(check.out.find("12 fibers"), std::string::npos) << check.out;
+  const Case original = read_case((m_dir / "fabric.toml").string());
+  const Case again = read_case((dir / "fabric.toml").string());
+  EXPECT_FALSE(again.fabric.has_value());
+  test::expect_same_case(original, again, /*compare_fabric=*/false);
+
+  // --out names the directory.
+  const Result other = fibra("generate fabric.toml --out gen/here");
+  ASSERT_EQ(other.code, 0) << other.err;
+  EXPECT_TRUE(fs::is_regular_file(m_dir / "gen" / "here" / "fabric.toml"));
+  EXPECT_TRUE(fs::is_regular_file(m_dir / "gen" / "here" / "slices" / "slice_y.png"));
+}
+
+TEST_F(Cli, GenerateOfABadCaseIsAnInputError) {
+  write("fabric.toml", replace(kSmallFabric, "fibers = 3", "fibers = 300"));  // do not fit in the tow
+  Result r = fibra("generate fabric.toml");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("fabric.toml"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("fabric"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(m_dir / "fabric_generated"));
+  r = fibra("generate missing.toml");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("missing.toml"), std::string::npos) << r.err;
+}
+
+/// Two cantilevers along x (tows "A" warp and "B" weft), bent down by a tip load.
+const std::string kTwoBeams = R"(
+title = "Two beams"
+
+[[material]]
+name = "steel"
+young = 210e9
+poisson = 0.3
+
+[[fiber]]
+name = "a"
+material = "steel"
+radius = 0.01
+points = [[0, 0, 0], [1, 0, 0]]
+elements = 4
+
+[[fiber]]
+name = "b"
+material = "steel"
+radius = 0.01
+points = [[0, 0.1, 0], [1, 0.1, 0]]
+elements = 4
+
+[[tow]]
+name = "A"
+direction = "warp"
+index = 0
+fibers = ["a"]
+
+[[tow]]
+name = "B"
+direction = "weft"
+index = 0
+fibers = ["b"]
+
+[[fix]]
+fiber = "a"
+node = "first"
+
+[[fix]]
+fiber = "b"
+node = "first"
+
+[[step]]
+  [[step.load]]
+  fiber = "a"
+  node = "last"
+  force = [0, 0, -1]
+
+  [[step.load]]
+  fiber = "b"
+  node = "last"
+  force = [0, 0, -2]
+)";
+
+TEST_F(Cli, SliceOfARunWritesSvgAndPng) {
+  write("beams.toml", kTwoBeams);
+  const Result run = fibra("run beams.toml --out out");
+  ASSERT_EQ(run.code, 0) << run.err;
+  const fs::path out = m_dir / "out";
+  if (!fs::exists(out / "case.toml"))  // written by the run; if not, as the run would
+    std::ofstream(out / "case.toml") << write_case_toml(read_case((m_dir / "beams.toml").string()));
+
+  Result r = fibra("slice out --plane x=0.5 --plane y=0.1");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("2 fibers cut"), std::string::npos) << r.out;
+  for (const char* name : {"slice_x_0.5.svg", "slice_x_0.5.png", "slice_y_0.1.svg", "slice_y_0.1.png"})
+    EXPECT_TRUE(fs::is_regular_file(out / "slices" / name)) << name << "\n" << r.out;
+  EXPECT_TRUE(is_png(out / "slices" / "slice_x_0.5.png"));
+  // x = 0.5 cuts both beams across; their cuts sit where the final state has them (bent down,
+  // b more than a), not at the reference z = 0.
+  const std::string svg = slurp(out / "slices" / "slice_x_0.5.svg");
+  EXPECT_NE(svg.find("Two beams"), std::string::npos);
+  EXPECT_NE(svg.find("data-fiber=\"a\" data-tow=\"A\""), std::string::npos) << svg;
+  EXPECT_NE(svg.find("data-fiber=\"b\" data-tow=\"B\""), std::string::npos) << svg;
+  auto mean_z = [&](const std::string& fiber) {
+    const size_t at = svg.find("points=\"", svg.find("data-fiber=\"" + fiber + "\"")) + 8;
+    std::stringstream ss(svg.substr(at, svg.find('"', at) - at));
+    std::string pair;
+    double sum = 0;
+    int n = 0;
+    while (ss >> pair) sum += std::stod(pair.substr(pair.find(',') + 1)), ++n;
+    return n ? sum / n : 0.0;
+  };
+  EXPECT_LT(mean_z("a"), -1e-3);  // [mm]
+  EXPECT_LT(mean_z("b"), 1.5 * mean_z("a"));
+  // y = 0.1 runs along b: a strip.
+  EXPECT_NE(slurp(out / "slices" / "slice_y_0.1.svg").find("data-kind=\"strip\""), std::string::npos);
+
+  // --out: the stem (one plane), or stem_AXIS_VALUE (several).
+  r = fibra("slice out --plane x=0.25 --out mine");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::is_regular_file(m_dir / "mine.svg"));
+  EXPECT_TRUE(is_png(m_dir / "mine.png"));
+  r = fibra("slice out --plane x=0.25 --plane 'x = 0.75' --out pics/cut");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::is_regular_file(m_dir / "pics" / "cut_x_0.25.svg"));
+  EXPECT_TRUE(fs::is_regular_file(m_dir / "pics" / "cut_x_0.75.png"));
+}
+
+TEST_F(Cli, SliceInputErrors) {
+  write("beams.toml", kTwoBeams);
+  ASSERT_EQ(fibra("run beams.toml --out out").code, 0);
+  const fs::path out = m_dir / "out";
+  if (!fs::exists(out / "case.toml"))
+    std::ofstream(out / "case.toml") << write_case_toml(read_case((m_dir / "beams.toml").string()));
+
+  // A malformed plane, whatever else is wrong: nothing is written.
+  for (const char* plane : {"x=abc", "w=0.5", "x0.5", "x=", "x=0.5mm", "x=nan"}) {
+    const Result r = fibra(std::string("slice out --plane '") + plane + "'");
+    EXPECT_EQ(r.code, 2) << plane << ": " << r.err;
+    EXPECT_NE(r.err.find("--plane"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(std::string("\"") + plane + "\""), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("x=0.5e-3"), std::string::npos) << r.err;  // an example of the form
+  }
+  EXPECT_FALSE(fs::exists(out / "slices"));
+
+  // A plane that misses every fiber: where the fibers are.
+  Result r = fibra("slice out --plane x=0.5 --plane y=3");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("y=3"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("cuts no fiber"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("x from 0 to 1, y from "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(" to 0.1, z from "), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out / "slices")) << "no slice written when a plane is wrong";
+
+  // A missing directory, a file instead, a directory without the run's files.
+  r = fibra("slice nowhere --plane x=0.5");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("nowhere"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("no such directory"), std::string::npos) << r.err;
+  r = fibra("slice beams.toml --plane x=0.5");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("not a directory"), std::string::npos) << r.err;
+  fs::remove(out / "nodes.csv");
+  r = fibra("slice out --plane x=0.5");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("nodes.csv"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("not found"), std::string::npos) << r.err;
+  fs::remove(out / "case.toml");
+  r = fibra("slice out --plane x=0.5");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("case.toml"), std::string::npos) << r.err;
+  // nodes.csv of another case.
+  fs::create_directories(m_dir / "other");
+  std::ofstream(m_dir / "other" / "case.toml") << write_case_toml(read_case((m_dir / "beams.toml").string()));
+  std::ofstream(m_dir / "other" / "nodes.csv") << "fiber,node,x,y,z,g1x,g1y,g1z,g2x,g2y,g2z\nzz,0,0,0,0,0,1,0,0,0,1\n";
+  r = fibra("slice other --plane x=0.5");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("nodes.csv: line 2"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("zz"), std::string::npos) << r.err;
 }
 
 }  // namespace

@@ -2,13 +2,70 @@
 
 #include <omp.h>
 
+#include <fmt/format.h>
+
+#include <cerrno>
 #include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "fibra/core/error.hpp"
+#include "fibra/io/case_writer.hpp"
 #include "fibra/io/output_writer.hpp"
+#include "fibra/io/slice.hpp"
+#include "fibra/model/fabric_report.hpp"
 #include "fibra/model/model.hpp"
 
 namespace fibra {
+namespace {
+
+/// Writes `text` to PATH.tmp, then renames it over PATH; throws RunError on failure.
+void write_text_atomic(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp";
+  errno = 0;
+  std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+  if (!out) throw RunError(fmt::format("cannot open for writing '{}': {}", tmp, std::strerror(errno)));
+  out << text;
+  out.close();
+  if (!out) {
+    std::remove(tmp.c_str());
+    throw RunError(fmt::format("cannot write '{}'", tmp));
+  }
+  errno = 0;
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    std::remove(tmp.c_str());
+    throw RunError(fmt::format("cannot rename '{}' to '{}': {}", tmp, path, std::strerror(err)));
+  }
+}
+
+const char* step_kind_name(StepSpec::Kind kind) {
+  switch (kind) {
+    case StepSpec::Kind::Weave:
+      return "weave";
+    case StepSpec::Kind::Relax:
+      return "relax";
+    case StepSpec::Kind::Standard:
+      break;
+  }
+  return "standard";
+}
+
+/// A step name as a file name: characters other than letters, digits, '.', '-', '_' become '_'.
+std::string file_stem(const std::string& name) {
+  std::string out;
+  for (char ch : name) {
+    const bool keep = (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') || ch == '.' ||
+                      ch == '-' || ch == '_';
+    out += keep ? ch : '_';
+  }
+  return out.empty() || out == "." || out == ".." ? "step" : out;
+}
+
+}  // namespace
 
 RunReport run_case(const Case& c, const RunOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -24,9 +81,29 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   if (solver.has_contact()) columns.insert(columns.end(), contact_columns.begin(), contact_columns.end());
   const BodySystem* bodies = solver.bodies();
   if (bodies) columns.insert(columns.end(), {"binding:updates", "binding:max_violation"});
+  // Woven samples: the fabric report (model/fabric_report.hpp) per increment, O(nodes).
+  const bool fabric = !c.tows.empty();
+  if (fabric) columns.insert(columns.end(), {"fabric:warp_crimp", "fabric:weft_crimp", "fabric:thickness"});
   OutputWriter writer(options.out_dir, model, columns, c.output.tube_sides);
+  // The expanded case (a [fabric] as its fibers, bodies and tows): `fibra slice` and any later
+  // look at the outputs rebuild the model from it.
+  write_text_atomic(writer.dir() + "/case.toml", write_case_toml(c));
+  std::optional<FabricReport> last_fabric;
+  std::string last_fabric_step;
+  nlohmann::json fabric_steps = nlohmann::json::array();
+  double time_fabric = 0.0;
+  auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   double time_output = 0.0;
   auto observer = [&](const IncrementInfo& info, const VecX& q) {
+    std::optional<FabricReport> rep;
+    if (fabric) {
+      const auto tf = std::chrono::steady_clock::now();
+      if (solver.has_contact())
+        rep = fabric_report(c, model, q, &solver.problem().contacts(), &info.contact_responses);
+      else
+        rep = fabric_report(c, model, q);
+      time_fabric += std::chrono::duration<double>(std::chrono::steady_clock::now() - tf).count();
+    }
     const auto t = std::chrono::steady_clock::now();
     HistoryRow row{info.step, info.step_index, info.increment, info.load_factor, info.iterations,
                    info.residual, info.wall_time, info.reactions};
@@ -38,6 +115,31 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                         info.increment_time - cs.detection_time});
     }
     if (bodies) row.extra.insert(row.extra.end(), {double(info.binding_updates), info.binding_violation});
+    if (rep) row.extra.insert(row.extra.end(), {rep->warp_crimp, rep->weft_crimp, rep->thickness});
+    if (rep && info.step_end) {
+      const StepSpec::Kind kind = c.steps[info.step_index].kind;
+      fabric_steps.push_back({{"step", info.step},
+                              {"kind", step_kind_name(kind)},
+                              {"warp_crimp", num(rep->warp_crimp)},
+                              {"weft_crimp", num(rep->weft_crimp)},
+                              {"thickness", num(rep->thickness)},
+                              {"max_penetration", num(rep->max_penetration)},
+                              {"max_penetration_ratio", num(rep->max_penetration_ratio)}});
+      last_fabric = rep;
+      last_fabric_step = info.step;
+      if (kind == StepSpec::Kind::Weave || kind == StepSpec::Kind::Relax) {
+        // Default slices across the middle of the sample: x half-way between the two middle
+        // weft axes (cuts the warps), y likewise (cuts the wefts).
+        const std::string stem = writer.dir() + "/slices/" + file_stem(info.step);
+        const std::string title = c.title.empty() ? c.name : c.title;
+        write_slice(stem + "_x", model, q, c.tows, 0, rep->section_x,
+                    fmt::format("{}: step {} ({}), x = {:.4g} mm", title, info.step, step_kind_name(kind),
+                                1e3 * rep->section_x));
+        write_slice(stem + "_y", model, q, c.tows, 1, rep->section_y,
+                    fmt::format("{}: step {} ({}), y = {:.4g} mm", title, info.step, step_kind_name(kind),
+                                1e3 * rep->section_y));
+      }
+    }
     const bool vtu = info.step_end || info.total_increments % c.output.every == 0;
     std::vector<BodyPoint> body_points;
     if (vtu && bodies)
@@ -70,9 +172,16 @@ RunReport run_case(const Case& c, const RunOptions& options) {
       initial_bodies.push_back({model.bodies[b].name, model.bodies[b].center, model.bodies[b].axes, Vec3::Zero(),
                                 Vec3::Zero(), Vec3::Zero(), Vec3::Zero(),
                                 bodies->member_positions(b, model.reference)});
-  writer.write_increment(model.reference, HistoryRow{"initial", -1, 0, 0.0, 0, 0.0, 0.0,
-                                                     std::vector<double>(columns.size(), 0.0)},
-                         0.0, true, nullptr, bodies ? &initial_bodies : nullptr);
+  std::vector<double> initial_extra(columns.size(), 0.0);
+  if (fabric) {
+    const FabricReport rep = fabric_report(c, model, model.reference);
+    const size_t n = initial_extra.size();
+    initial_extra[n - 3] = rep.warp_crimp;
+    initial_extra[n - 2] = rep.weft_crimp;
+    initial_extra[n - 1] = rep.thickness;
+  }
+  writer.write_increment(model.reference, HistoryRow{"initial", -1, 0, 0.0, 0, 0.0, 0.0, initial_extra}, 0.0, true,
+                         nullptr, bodies ? &initial_bodies : nullptr);
   RunReport report;
   report.result = solver.run(observer);
   report.stats = solver.stats();
@@ -81,6 +190,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   report.nodes = model.num_nodes();
   report.dofs = model.num_dofs();
   report.elements = static_cast<Index>(model.elements.size());
+  report.fabric = last_fabric;
   writer.write_nodes(solver.state());
   report.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -100,6 +210,16 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                  {"elements", report.elements}, {"bodies", model.bodies.size()}, {"bindings", c.bindings.size()}};
   j["timings"] = {{"total", report.wall_time}, {"assembly", s.time_assembly},
                   {"factorization", s.time_factorization}, {"solve", s.time_solve}, {"output", time_output}};
+  if (fabric) {
+    j["timings"]["fabric_report"] = time_fabric;
+    if (last_fabric) {
+      j["fabric"] = to_json(*last_fabric);
+      j["fabric"]["step"] = last_fabric_step;
+    } else {
+      j["fabric"] = nullptr;
+    }
+    j["fabric_steps"] = fabric_steps;
+  }
   j["solver"] = {{"linear_solver", c.solver.linear_solver},
                  {"ordering", c.solver.ordering},
                  {"threads", omp_get_max_threads()},
