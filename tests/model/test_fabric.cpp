@@ -1,0 +1,157 @@
+// Fabric generator pieces: weave patterns (named repeats, validation), the packing of fibers
+// in a tow's elliptical section (count, no overlap, inside the ellipse, volume fraction as
+// computed from the geometry), and the expansion of a [fabric] into tows, bodies and bindings.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "fibra/core/error.hpp"
+#include "fibra/io/case_reader.hpp"
+#include "fibra/model/fabric.hpp"
+
+namespace fibra {
+namespace {
+
+TEST(WeavePatterns, NamedRepeats) {
+  std::string error;
+  EXPECT_EQ(named_weave("plain", error), (std::vector<std::vector<int>>{{1, 0}, {0, 1}}));
+  // Twill 2/1: each warp over two wefts then under one, shifted by one per weft.
+  const auto twill = named_weave("twill 2/1", error);
+  EXPECT_EQ(twill, (std::vector<std::vector<int>>{{1, 1, 0}, {0, 1, 1}, {1, 0, 1}}));
+  const auto basket = named_weave("basket", error);
+  ASSERT_EQ(basket.size(), 4u);
+  EXPECT_EQ(basket[0], (std::vector<int>{1, 1, 0, 0}));
+  EXPECT_EQ(basket[2], (std::vector<int>{0, 0, 1, 1}));
+  // Satin 5 (move 2): one interlacing per weft and per warp.
+  const auto satin = named_weave("satin 5", error);
+  ASSERT_EQ(satin.size(), 5u);
+  for (int j = 0; j < 5; ++j) {
+    int row = 0, col = 0;
+    for (int i = 0; i < 5; ++i) {
+      row += satin[j][i] == 0;
+      col += satin[i][j] == 0;
+    }
+    EXPECT_EQ(row, 1);
+    EXPECT_EQ(col, 1);
+  }
+  for (const char* name : {"plain", "twill 2/1", "twill 2/2", "twill 3/1", "basket", "basket 3", "satin 5", "satin 8/3"})
+    EXPECT_EQ(check_weave(named_weave(name, error)), "") << name;
+  EXPECT_TRUE(named_weave("twil 2/1", error).empty());
+  EXPECT_NE(error.find("accepted"), std::string::npos);
+  EXPECT_TRUE(named_weave("satin 6/3", error).empty());  // 3 not coprime with 6
+}
+
+TEST(WeavePatterns, DegenerateMatricesAreRefused) {
+  EXPECT_NE(check_weave({}), "");
+  EXPECT_NE(check_weave({{1, 0}, {1}}), "");          // ragged
+  EXPECT_NE(check_weave({{1, 2}, {0, 1}}), "");       // not 0/1
+  EXPECT_NE(check_weave({{1, 1}, {0, 0}}), "");       // a weft that never interlaces
+  EXPECT_NE(check_weave({{1, 0}, {1, 0}}), "");       // a warp that never interlaces
+  EXPECT_EQ(check_weave({{1, 0}, {0, 1}}), "");
+  EXPECT_TRUE(warp_above({{1, 0}, {0, 1}}, 2, 4));    // tiled
+  EXPECT_FALSE(warp_above({{1, 0}, {0, 1}}, 3, 4));
+}
+
+class Packing : public ::testing::TestWithParam<int> {};
+
+TEST_P(Packing, CountNoOverlapInsideTheEllipse) {
+  const int n = GetParam();
+  const double r = 2e-5, width = 0.8e-3, thickness = 0.2e-3;
+  const std::vector<Eigen::Vector2d> p = pack_ellipse(n, r, width, thickness);
+  ASSERT_EQ(static_cast<int>(p.size()), n);
+  double closest = 1e300;
+  for (int i = 0; i < n; ++i)
+    for (int j = i + 1; j < n; ++j) closest = std::min(closest, (p[i] - p[j]).norm());
+  if (n > 1) EXPECT_GE(closest, 2 * r * (1 - 1e-12));
+  // Every disc inside the ellipse (its boundary sampled densely).
+  for (const auto& c : p)
+    for (int s = 0; s < 720; ++s) {
+      const double t = 2 * std::numbers::pi * s / 720;
+      const double x = c.x() + r * std::cos(t), y = c.y() + r * std::sin(t);
+      ASSERT_LE((x / (0.5 * width)) * (x / (0.5 * width)) + (y / (0.5 * thickness)) * (y / (0.5 * thickness)), 1.0 + 1e-9);
+    }
+  // Volume fraction in the ellipse, as the report defines it for the starting section.
+  const double vf = n * r * r / (0.25 * width * thickness);
+  EXPECT_GT(vf, 0.0);
+  EXPECT_LT(vf, 0.907);  // below hexagonal close packing
+}
+
+INSTANTIATE_TEST_SUITE_P(Counts, Packing, ::testing::Values(3, 7, 48, 60));
+
+TEST(Packing, TooManyFibersDoNotFit) {
+  EXPECT_TRUE(pack_ellipse(2000, 2e-5, 0.8e-3, 0.2e-3).empty());
+  EXPECT_FALSE(pack_ellipse(48, 2e-5, 0.8e-3, 0.2e-3).empty());
+}
+
+TEST(FabricExpansion, TowsBodiesAndBindings) {
+  const Case c = parse_case_toml(R"(
+[[material]]
+name = "glass"
+young = 72e9
+poisson = 0.22
+[fabric]
+pattern = "twill 2/1"
+warp = { tows = 3, spacing = 1.0e-3 }
+weft = { tows = 4, spacing = 1.2e-3 }
+  [fabric.tow]
+  fibers = 7
+  width = 0.7e-3
+  thickness = 0.25e-3
+  [fabric.fiber]
+  radius = 5.0e-5
+  material = "glass"
+  element_length = 2.0e-4
+[[step]]
+name = "weave"
+kind = "weave"
+)", "fabric.toml");
+  EXPECT_EQ(c.fibers.size(), 7u * 7u);
+  EXPECT_EQ(c.tows.size(), 7u);
+  EXPECT_EQ(c.bodies.size(), 2u * 7u + 4u);           // two ends per tow, four edges
+  EXPECT_EQ(c.bindings.size(), 2u * 7u + 4u);
+  EXPECT_EQ(c.weave.size(), 3u);
+  // Warp tows along x at y = -1, 0, +1 mm; their fibers span the weft axes plus the margin.
+  for (const FiberSpec& f : c.fibers)
+    if (f.name.rfind("warp", 0) == 0) {
+      EXPECT_NEAR(f.path.points.front().x(), -1.8e-3 - 0.6e-3, 1e-15);  // margin: half the larger spacing
+      EXPECT_NEAR(f.path.points.back().x(), 1.8e-3 + 0.6e-3, 1e-15);
+    }
+  // The edge bodies hold the tow ends of their side.
+  for (const BindingSpec& b : c.bindings)
+    if (b.body == "edge.x+") {
+      EXPECT_EQ(b.bodies.size(), 3u);
+      EXPECT_EQ(b.bodies.front(), "warp0.end");
+    }
+  // Spacing below the tow width, or more fibers than fit: errors naming the key.
+  auto error_of = [](const std::string& text) {
+    try {
+      parse_case_toml(text, "bad.toml");
+    } catch (const InputError& e) {
+      return e.key();
+    }
+    return std::string("no error");
+  };
+  const std::string base = R"(
+[[material]]
+name = "glass"
+young = 72e9
+poisson = 0.22
+[fabric]
+pattern = "plain"
+weft = { tows = 2, spacing = 1.0e-3 }
+  [fabric.fiber]
+  radius = 5.0e-5
+  material = "glass"
+  element_length = 2.0e-4
+[[step]]
+name = "s"
+)";
+  EXPECT_EQ(error_of(base + "[fabric.warp]\ntows = 2\nspacing = 0.5e-3\n[fabric.tow]\nfibers = 5\nwidth = 0.7e-3\nthickness = 0.25e-3\n"),
+            "fabric.warp.spacing");
+  EXPECT_EQ(error_of(base + "[fabric.warp]\ntows = 2\nspacing = 1e-3\n[fabric.tow]\nfibers = 500\nwidth = 0.7e-3\nthickness = 0.25e-3\n"),
+            "fabric.warp.tow.fibers");
+}
+
+}  // namespace
+}  // namespace fibra
