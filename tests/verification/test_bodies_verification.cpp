@@ -9,10 +9,12 @@
 //     sum u_i y_i = sum u_i z_i = 0: four nonlinear equations solved here by Newton. The
 //     solver must give each end's displacement and the body's force to 1e-6, the body's
 //     force must equal the sum of the clamps' reactions, and the ends must not move alike.
+//     Driven by that force instead (x free), the grip and every end reach the same state.
 //  2. A bound group twisted by its body: the six mean conditions, computed here from the
 //     nodes (mean position in the body frame; Kabsch best-fit rotation of the group relative
 //     to the body from an SVD), hold to 1e-9; then a nodal load pushes one member sideways:
-//     it moves while the group's mean does not (the others move the other way).
+//     it moves while the group's mean does not (the others move the other way). Driven by
+//     the moment the twist needed instead (rotation about x free), the body turns as far.
 //  3. Two-level hierarchy (fiber ends -> two tow bodies -> grip) against one level (all ends
 //     -> grip), where both mean the same: two identical tows side by side along y, each of
 //     unequal fibers but mirror-symmetric about its own x-z plane, the grip moved along x and
@@ -155,6 +157,15 @@ increments = 2
   EXPECT_GT(umax - umin, 0.3 * delta);
   EXPECT_NEAR(grip.center.x(), delta, 1e-12);
   EXPECT_LT(last.binding_violation, 1e-8 * s.model.length_scale);
+  // The same grip driven by the force it needed: it moves by delta (a force-driven body).
+  std::string driven = toml;
+  const std::string prescribed = fmt::format("  displacement = [{}, 0, 0]\n", delta);
+  driven.replace(driven.find(prescribed), prescribed.size(),
+                 fmt::format("  displacement = [\"free\", 0, 0]\n  force = [{:.17g}, 0, 0]\n", grip.force.x()));
+  const Solved f = solve_toml(driven, "bundle_force.toml");
+  ASSERT_TRUE(f.converged()) << f.result.message;
+  EXPECT_NEAR(body_of(f.increments.back(), 0).center.x(), delta, 1e-6 * delta);
+  for (int i = 0; i < 7; ++i) EXPECT_NEAR(f.u(-1, i).x(), x[i], 1e-6 * delta) << "fiber " << i;
   std::printf("bundle: grip force %.9g N (reference %.9g), ends move %.4g..%.4g of delta, %d binding updates\n",
               grip.force.x(), ref_total, umin / delta, umax / delta, s.stats.binding_updates);
 }
@@ -280,6 +291,16 @@ increments = 2
     if (i != 1) others += (x2[i] - x1[i]).y();
   EXPECT_NEAR(others, -moved, 1e-6 * moved);
   // The body holds the push: its force balances the load, minus what the clamps take.
+  // The twist driven by the moment it needed (rotation about x free): the body turns by the
+  // same angle (a moment-driven body; the moment does the work M . theta per increment, exact
+  // about a fixed axis).
+  std::string driven = toml.substr(0, toml.find("[[step]]\nname = \"push\""));
+  const std::string prescribed = fmt::format("  rotation = [{}, 0, 0]\n", twist);
+  driven.replace(driven.find(prescribed), prescribed.size(),
+                 fmt::format("  rotation = [\"free\", 0, 0]\n  moment = [{:.17g}, 0, 0]\n", b1.moment.x()));
+  const Solved m = solve_toml(driven, "group_moment.toml");
+  ASSERT_TRUE(m.converged()) << m.result.message;
+  EXPECT_NEAR(body_of(m.increments.back(), 0).rotation.x(), twist, 1e-6 * twist);
   std::printf("group: member pushed by %.4g r, the others by %.4g r in total; head moment %.4g N m\n", moved / r,
               others / r, b1.moment.x());
 }
