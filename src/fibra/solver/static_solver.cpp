@@ -197,9 +197,13 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   // Weaving is a pseudo-time process: a drag towards the increment's start (stiffness per
   // node a multiple of the contact penalty) keeps each increment well posed while loose
   // fibers are pushed through their crossing partners; the relax step removes it.
-  m_problem->set_drag(weave ? m_case.solver.weave_drag * m_contact->initial_stiffness() : 0.0, m_q_start);
-  // Relax steps (after weaving, fibers only held by contact): a vanishing proximal drag.
-  m_proximal = m_case.steps[step].kind == StepSpec::Kind::Relax && m_case.solver.relax_drag > 0.0;
+  const bool relax = m_case.steps[step].kind == StepSpec::Kind::Relax;
+  const double k0 = m_contact->initial_stiffness();
+  // Relax: the same pseudo-time drag, fading out over the step, then at its end a vanishing
+  // proximal drag (equilibrium).
+  m_problem->set_drag(weave ? m_case.solver.weave_drag * k0 : relax ? m_case.solver.weave_drag * k0 * (1.0 - lambda) : 0.0,
+                      m_q_start);
+  m_proximal = relax && lambda >= 1.0 - 1e-12 && m_case.solver.relax_drag > 0.0;
   m_proximal_drag = m_case.solver.relax_drag * m_contact->initial_stiffness();
 
   // METHOD §4: (1) contact elements, repeated while the set changes; (2) normals, repeated
