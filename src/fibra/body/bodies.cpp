@@ -250,28 +250,20 @@ double BodySystem::binding_energy(const Binding& b, const VecX& q, VecX* grad, E
   Mat3 dR[3], d2R[9];
   const bool derivatives = grad || hess;
   const Mat3 e = rotation_exp(-theta, derivatives ? dR : nullptr, hess ? d2R : nullptr);
-  Mat3 de[3];
-  for (int j = 0; j < 3; ++j) de[j] = -dR[j];  // d/dtheta of R(-theta); second derivatives keep their sign
+  Mat3 de[3];  // d/dtheta of R(-theta); second derivatives keep their sign
+  if (derivatives)
+    for (int j = 0; j < 3; ++j) de[j] = -dR[j];
   const double n = static_cast<double>(b.members.size());
   const double w = 1.0 / (n * b.s);
 
-  // Conditions (spatial frame of the increment start).
-  Vec3 pbar = Vec3::Zero(), grot = Vec3::Zero(), qsum = Vec3::Zero();
-  for (const Member& m : b.members) pbar += q.segment<3>(m.dof) / n;
-  const Vec3 u = pbar - r;
+  // Conditions (spatial frame of the increment start), and what their derivatives reuse.
+  const Vec6 g = spatial_conditions(b, q);
+  Vec3 pbar = Vec3::Zero(), qsum = Vec3::Zero();
   for (const Member& m : b.members) {
-    const Vec3 qm = dref * m.a;
-    qsum += qm;
-    grot += qm.cross(e * (q.segment<3>(m.dof) - r));
-    if (m.body >= 0) {
-      const Body& child = m_model.bodies[m.body];
-      const Mat3 kc = m_bodies[m.body].frame_ref * child.axes.transpose() * body.axes * dref.transpose();
-      grot += m.l2 * vee_antisymmetric(e * rotation_exp(q.segment<3>(m.dof + 3).eval()) * kc);
-    }
+    pbar += q.segment<3>(m.dof) / n;
+    qsum += dref * m.a;
   }
-  Vec6 g;
-  g.head<3>() = e * u - dref * b.mean;
-  g.tail<3>() = w * grot;
+  const Vec3 u = pbar - r;
   Vec6 lam;
   lam.head<3>() = dref * b.lambda.head<3>();
   lam.tail<3>() = dref * b.lambda.tail<3>();
@@ -311,18 +303,15 @@ double BodySystem::binding_energy(const Binding& b, const VecX& q, VecX* grad, E
     ChildTerms& t = child[i];
     t.kc = m_bodies[m.body].frame_ref * cb.axes.transpose() * body.axes * dref.transpose();
     t.rc = rotation_exp(q.segment<3>(m.dof + 3).eval(), t.drc, hess ? t.d2rc : nullptr);
+    for (int l = 0; l < 3; ++l)
+      jac.block<3, 1>(3, m.offset + 3 + l) = w * m.l2 * vee_antisymmetric(e * t.drc[l] * t.kc);
   }
   for (int j = 0; j < 3; ++j) {
     Vec3 rot = Vec3::Zero();
     for (size_t i = 0; i < b.members.size(); ++i) {
       const Member& m = b.members[i];
       rot += (dref * m.a).cross(de[j] * (q.segment<3>(m.dof) - r));
-      if (m.body >= 0) {
-        const ChildTerms& t = child[i];
-        rot += m.l2 * vee_antisymmetric(de[j] * t.rc * t.kc);
-        for (int l = 0; l < 3; ++l)
-          jac.block<3, 1>(3, m.offset + 3 + l) = w * m.l2 * vee_antisymmetric(e * t.drc[l] * t.kc);
-      }
+      if (m.body >= 0) rot += m.l2 * vee_antisymmetric(de[j] * child[i].rc * child[i].kc);
     }
     jac.block<3, 1>(0, po + 3 + j) = de[j] * u;
     jac.block<3, 1>(3, po + 3 + j) = w * rot;

@@ -167,8 +167,8 @@ bool collinear(const std::vector<Eigen::Vector2d>& p) {
 std::vector<Eigen::Vector2d> pack_ellipse(int count, double r, double width, double thickness) {
   const double a = 0.5 * width, b = 0.5 * thickness;
   if (count <= 0 || r <= 0 || a < r || b < r) return {};
-  auto best_for = [&](double d) {
-    std::vector<Eigen::Vector2d> best;
+  // The sites for spacing d (rows offset from the centre first), or none.
+  auto best_for = [&](double d) -> std::vector<Eigen::Vector2d> {
     for (int phase : {1, 0}) {
       std::vector<Eigen::Vector2d> s = lattice_sites(d, phase, r, a, b);
       if (static_cast<int>(s.size()) < count) continue;
@@ -179,7 +179,7 @@ std::vector<Eigen::Vector2d> pack_ellipse(int count, double r, double width, dou
       if (count >= 3 && collinear(s)) continue;
       return s;
     }
-    return best;
+    return {};
   };
   if (best_for(2.0 * r).empty()) return {};
   // Largest spacing that still holds them (bisection; the count falls with the spacing).
@@ -191,12 +191,8 @@ std::vector<Eigen::Vector2d> pack_ellipse(int count, double r, double width, dou
     else
       lo = mid;
   }
-  std::vector<Eigen::Vector2d> out = best_for(lo);
-  // Centre the packing on the section's axis.
-  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-  for (const auto& v : out) mean += v / static_cast<double>(out.size());
-  (void)mean;  // sites are symmetric only approximately; the tow-end bodies sit at the actual centroid
-  return out;
+  // Sites are symmetric only approximately; the tow-end bodies sit at the actual centroid.
+  return best_for(lo);
 }
 
 void expand_fabric(Case& c) {

@@ -221,7 +221,9 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       const double deepest = m_contact->prescribe_normals(fresh, m_q, Vec3::UnitZ(), rule, 0.0);
       if (m_weave_depth < 0.0) m_weave_depth = deepest;
       // Released over the first half of the step; the second half settles.
-      m_contact->prescribe_normals(fresh, m_q, Vec3::UnitZ(), rule, std::max(0.0, 1.0 - 2.0 * lambda) * m_weave_depth);
+      const double offset = std::max(0.0, 1.0 - 2.0 * lambda) * m_weave_depth;
+      for (ContactElement& c : fresh)
+        if (c.prescribed) c.offset = offset;
     }
     ++m_contact_stats.detections;
     m_contact_stats.detection_time += seconds_since(t0);
