@@ -153,5 +153,52 @@ TEST(ContactElement, SymmetricTangentIsTheSymmetricApproximation) {
   EXPECT_GT(eig.eigenvalues().minCoeff(), -1e-9 * h.norm());  // positive semi-definite
 }
 
+// Frozen cone (the solver's choice): the normal force that sets the cone and the stick
+// stiffness is a given number, so the friction energy is a function of the slip alone; its
+// gradient is the friction force and the symmetric tangent is exact (no fn coupling), in stick
+// and in slip; the cone's radius is mu times the frozen force, whatever the current one.
+TEST(ContactElement, FrozenConeGivesAnExactSymmetricTangent) {
+  std::mt19937 rng(23);
+  const FrictionParams fp{0.3, 1e-6};
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (double slide : {1e-8, 0.5e-6, 3e-6}) {
+    for (int trial = 0; trial < 4; ++trial) {
+      Pair s = make_pair(rng, -3e-6, slide * Vec3(u(rng), u(rng), u(rng)).normalized());
+      ContactResponse now;
+      contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, nullptr, &now);
+      s.c.friction_normal = 0.7 * now.normal_force;  // a cone set at another state
+      ContactResponse r;
+      contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, nullptr, &r);
+      EXPECT_EQ(r.normal_force, now.normal_force);
+      EXPECT_LE(r.friction.norm(), fp.mu * s.c.friction_normal * (1 + 1e-12));
+      if (r.slip) {
+        EXPECT_NEAR(r.friction.norm(), fp.mu * s.c.friction_normal, 1e-12 * r.normal_force);
+      }
+      const char* what = r.slip ? "frozen slip" : "frozen stick";
+      check_derivatives(s, fp, false, 1e-5, what);
+      check_derivatives(s, fp, true, 1e-5, what);
+      ContactMat h;
+      contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, &h, nullptr, true);
+      EXPECT_LT((h - h.transpose()).norm(), 1e-12 * h.norm()) << what << ": the exact tangent is symmetric";
+      // The gradient is that of the energy (a potential of the slip), away from the cone's edge.
+      Eigen::VectorXd q(kContactDofs);
+      q << s.qa, s.qb;
+      auto energy_of = [&](const Eigen::VectorXd& x) {
+        return contact_element_energy(s.c, x.data(), x.data() + kElementDofs, fp, nullptr, nullptr, nullptr);
+      };
+      ContactVec g;
+      contact_element_energy(s.c, q.data(), q.data() + kElementDofs, fp, &g, nullptr, nullptr);
+      EXPECT_LT(test::rel_error(g, test::fd_gradient(energy_of, q, test::fd_step(1e-6)), 1e-300), 2e-5) << what;
+    }
+  }
+  // A cone frozen at zero force: no friction, even on a penetrating element.
+  Pair s = make_pair(rng, -3e-6, Vec3(1e-7, 0, 0));
+  s.c.friction_normal = 0.0;
+  ContactResponse r;
+  contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, nullptr, &r);
+  EXPECT_GT(r.normal_force, 0.0);
+  EXPECT_EQ(r.friction.norm(), 0.0);
+}
+
 }  // namespace
 }  // namespace fibra

@@ -32,9 +32,13 @@ double contact_element_energy(const ContactElement& c, const double* q_a, const 
   double kt = 0.0;
   const Mat3 proj = Mat3::Identity() - nrm * nrm.transpose();
   const Vec3 du = proj * (d - c.separation_previous);
-  if (friction.mu > 0.0 && fn > 0.0) {
-    kt = friction.mu * fn / friction.elastic_slip;
-    fr = friction_return_map(c.friction_previous, d - c.separation_previous, nrm, fn, friction.mu, kt);
+  const bool frozen = c.friction_normal >= 0.0;
+  const double fn_cone = frozen ? c.friction_normal : fn;
+  // Frozen, the spring acts even on an element that opens during the solve (the energy stays a
+  // C1 convex function of the slip); the next freeze, at zero force, removes it.
+  if (friction.mu > 0.0 && fn_cone > 0.0) {
+    kt = friction.mu * fn_cone / friction.elastic_slip;
+    fr = friction_return_map(c.friction_previous, d - c.separation_previous, nrm, fn_cone, friction.mu, kt);
     const Vec3 fprev = proj * c.friction_previous;
     energy += fr.slip ? fr.force.dot(du) : fprev.dot(du) + 0.5 * kt * du.squaredNorm();
   }
@@ -75,16 +79,17 @@ double contact_element_energy(const ContactElement& c, const double* q_a, const 
       if (!consistent) {
         // Symmetric approximation: kt held fixed, and in slip only the turning of the force
         // with the trial direction.
-        k3 += fr.slip ? Mat3((kt * friction.mu * fn / fr.trial_norm) * (proj - t * t.transpose())) : Mat3(kt * proj);
+        // (Exact when the cone is frozen.)
+        k3 += fr.slip ? Mat3((kt * friction.mu * fn_cone / fr.trial_norm) * (proj - t * t.transpose())) : Mat3(kt * proj);
       } else {
-        // Exact: kt = mu fn / delta depends on the gap, d fn / d d = -fn' N.
-        const Vec3 dfn = -c.law.stiffness_at(p) * nrm;
+        // Exact: kt = mu fn / delta depends on the gap, d fn / d d = -fn' N (not when frozen).
+        const Vec3 dfn = frozen ? Vec3::Zero() : Vec3(-c.law.stiffness_at(p) * nrm);
         const Mat3 dtrial = kt * proj + (friction.mu / friction.elastic_slip) * du * dfn.transpose();
         if (!fr.slip) {
           k3 += dtrial;
         } else {
           k3 += friction.mu * t * dfn.transpose() +
-                (friction.mu * fn / fr.trial_norm) * (Mat3::Identity() - t * t.transpose()) * dtrial;
+                (friction.mu * fn_cone / fr.trial_norm) * (Mat3::Identity() - t * t.transpose()) * dtrial;
         }
       }
     }

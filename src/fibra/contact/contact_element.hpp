@@ -36,6 +36,11 @@ struct ContactElement {
   bool fresh = true;               ///< appeared at the last detection (no history carried over)
   bool prescribed = false;         ///< normal set by the weave pattern (not updated from the centres)
   double offset = 0;               ///< added to the gap: penetration hidden from the law [m] (weaving)
+  /// Normal force that sets the friction cone and the stick stiffness [N]; negative: the
+  /// current normal force. The solver freezes it per normal-update loop (docs/theory/contact.md,
+  /// "Frozen friction limit"), which makes the friction potential of a Newton solve a convex
+  /// function of the slip with an exactly symmetric Hessian.
+  double friction_normal = -1;
   // Friction history (at the last converged increment).
   Vec3 friction_previous = Vec3::Zero();  ///< tangential force on B at the last converged state [N]
   Vec3 separation_previous = Vec3::Zero();  ///< x_B - x_A at the last converged state [m]

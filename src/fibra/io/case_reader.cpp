@@ -1530,7 +1530,7 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   check_keys(t, path,
              {"residual_tolerance", "displacement_tolerance", "max_iterations", "max_cuts",
               "line_search", "linear_solver", "ordering", "binding_tolerance", "max_binding_updates",
-              "binding_stiffness", "max_step", "weave_drag", "relax_drag"});
+              "binding_stiffness", "max_step", "weave_drag", "relax_drag", "relax_tolerance"});
   SolverSpec s;
   if (const Value* v = find(t, "residual_tolerance")) {
     s.residual_tolerance = positive(*v, join(path, "residual_tolerance"));
@@ -1585,6 +1585,12 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
       if (!(x >= 0)) fail(key, fmt::format("expected a number >= 0 (relative to the contact penalty), got {}", x), v);
       (std::string(name) == "weave_drag" ? s.weave_drag : s.relax_drag) = x;
     }
+  }
+  if (const Value* v = find(t, "relax_tolerance")) {
+    const std::string key = join(path, "relax_tolerance");
+    s.relax_tolerance = to_number(*v, key);
+    if (!(s.relax_tolerance > 0))
+      fail(key, fmt::format("expected a number > 0 (relative to the reference force), got {}", s.relax_tolerance), v);
   }
   if (const Value* v = find(t, "max_step")) {
     const std::string key = join(path, "max_step");

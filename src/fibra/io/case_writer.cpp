@@ -289,6 +289,7 @@ void write_solver(std::string& out, const SolverSpec& s) {
   out += fmt::format("binding_stiffness = {}\n", number(s.binding_stiffness));
   out += fmt::format("weave_drag = {}\n", number(s.weave_drag));
   out += fmt::format("relax_drag = {}\n", number(s.relax_drag));
+  out += fmt::format("relax_tolerance = {}\n", number(s.relax_tolerance));
 }
 
 void write_contact(std::string& out, const ContactSpec& c) {

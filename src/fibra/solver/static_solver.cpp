@@ -199,12 +199,9 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   // fibers are pushed through their crossing partners; the relax step removes it.
   const bool relax = m_case.steps[step].kind == StepSpec::Kind::Relax;
   const double k0 = m_contact->initial_stiffness();
-  // Relax: the same pseudo-time drag, fading out over the step, then at its end a vanishing
-  // proximal drag (equilibrium).
-  m_problem->set_drag(weave ? m_case.solver.weave_drag * k0 : relax ? m_case.solver.weave_drag * k0 * (1.0 - lambda) : 0.0,
-                      m_q_start);
-  m_proximal = relax && lambda >= 1.0 - 1e-12 && m_case.solver.relax_drag > 0.0;
-  m_proximal_drag = m_case.solver.relax_drag * m_contact->initial_stiffness();
+  // Relax: each increment is a proximal-point step, a drag of adaptive stiffness (run())
+  // towards the increment's start.
+  m_problem->set_drag(weave ? m_case.solver.weave_drag * k0 : relax ? m_relax_drag : 0.0, m_q_start);
 
   // METHOD §4: (1) contact elements, repeated while the set changes; (2) normals, repeated
   // while they turn; (3) Newton on the rest. A zone that penetrates too deep gets a stiffer
@@ -229,10 +226,32 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     m_contact_stats.detection_time += seconds_since(t0);
     return fresh;
   };
+  // Weave steps are frictionless: their motion (fibers pushed through their crossing partners
+  // along prescribed normals) is a pseudo-process, not a physical slip; friction acts from the
+  // relax step on.
+  FrictionParams friction = m_contact->friction();
+  if (weave) friction.mu = 0.0;
   std::vector<ContactElement> contacts = detect();
   for (int d = 0; d < spec.max_detections; ++d) {
-    if (m_problem->set_contacts(std::move(contacts), m_contact->friction())) m_linear->analyze(m_problem->pattern());
+    if (m_problem->set_contacts(std::move(contacts), friction)) m_linear->analyze(m_problem->pattern());
     bool normals_settled = false;
+    // Friction: the normal force that sets each element's cone is frozen for a Newton solve
+    // and updated with the normals (a fixed point, like them): within the solve the friction
+    // potential is then convex in the slip and its Hessian exact and symmetric.
+    const bool freeze = friction.mu > 0.0;
+    auto freeze_cones = [&]() {
+      double change = 0.0, largest = 0.0;
+      const std::vector<ContactResponse> now = m_problem->contact_responses(m_q);
+      std::vector<ContactElement>& elements = m_problem->contacts();
+      for (size_t e = 0; e < elements.size(); ++e) {
+        const double before = std::max(0.0, elements[e].friction_normal);
+        change = std::max(change, std::abs(now[e].normal_force - before));
+        largest = std::max(largest, now[e].normal_force);
+        elements[e].friction_normal = now[e].normal_force;
+      }
+      return largest > 0.0 ? change / largest : 0.0;
+    };
+    if (freeze) freeze_cones();
     for (int k = 0; k < spec.max_normal_updates; ++k) {
       int its = 0;
       if (!equilibrium(history, its, residual)) {
@@ -241,7 +260,12 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       }
       total_iterations += its;
       ++m_contact_stats.normal_updates;
-      if (m_contact->update_normals(m_problem->contacts(), m_q) < spec.normal_tolerance) {
+      const double turn = m_contact->update_normals(m_problem->contacts(), m_q);
+      const double cone_change = freeze ? freeze_cones() : 0.0;
+      if (std::getenv("FIBRA_DEBUG_NEWTON"))
+        fmt::print(stderr, " normals turned {:.3e} rad, friction cones changed {:.3e}, {} elements\n", turn, cone_change,
+                   m_problem->contacts().size());
+      if (turn < spec.normal_tolerance && cone_change <= spec.normal_tolerance) {
         normals_settled = true;
         break;
       }
@@ -279,7 +303,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     }
     // New elements: refuse those that start deep inside another fiber (a crossing missed
     // between two detections); the increment is cut.
-    if (m_problem->set_contacts(contacts, m_contact->friction())) m_linear->analyze(m_problem->pattern());
+    if (m_problem->set_contacts(contacts, friction)) m_linear->analyze(m_problem->pattern());
     const std::vector<ContactResponse> fresh_responses = m_problem->contact_responses(m_q);
     if (!weave && m_contact->passed_through(m_problem->contacts(), fresh_responses)) return false;
     contacts = m_problem->contacts();
@@ -292,22 +316,12 @@ bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, do
   const double tolerance = m_case.solver.binding_tolerance * m_model.length_scale;
   const double settle = m_case.solver.displacement_tolerance * m_model.length_scale;
   if (m_bodies) m_bodies->set_anchors(m_q);
-  if (m_proximal) m_problem->set_drag(m_proximal_drag, m_q);
   for (int update = 0;; ++update) {
     int its = 0;
     const bool ok = newton(history, its, residual);
     iterations += its;
     if (!ok) return false;
-    // Proximal drag (relax steps): the anchor follows the solution until it no longer moves,
-    // so the drag's force vanishes at convergence (a proximal-point iteration).
     bool settled = true;
-    if (m_proximal) {
-      double drift = 0.0;
-      const VecX& anchor = m_problem->drag_anchor();
-      for (Index d = 0; d < m_q.size(); ++d) drift = std::max(drift, std::abs(m_q[d] - anchor[d]) * m_length_scale[d]);
-      settled = drift <= settle;
-      if (!settled) m_problem->set_drag(m_proximal_drag, m_q);
-    }
     if (m_bodies) {
       // Augmented Lagrangian: conditions within the tolerance; proximal anchors: no member
       // moved more than the tolerance since they were set (their springs' force is then
@@ -360,6 +374,15 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       ext += (s * m_problem->forces()[d]) * (s * m_problem->forces()[d]);
     }
     const double fref = std::max({std::sqrt(ext), std::sqrt(react), force_floor});
+    m_reference_force = fref;
+    if (std::getenv("FIBRA_DEBUG_NEWTON")) {
+      Index wr = 0;
+      for (Index d = 0; d < n; ++d)
+        if (std::abs(m_force_scale[d] * r[d]) > std::abs(m_force_scale[wr] * r[wr])) wr = d;
+      fmt::print(stderr, "  it {:2d} largest residual {:.3e} N at dof {} (group {}, component {}), reference {:.3e} N\n",
+                 iterations, m_force_scale[wr] * r[wr], wr, m_problem->pattern().group_of_dof(wr),
+                 wr < m_model.node_dofs ? wr % 9 : (wr - m_model.node_dofs) % 6, fref);
+    }
     residual = std::sqrt(res) / fref;
     history.push_back(residual);
     if (!std::isfinite(residual)) return false;
@@ -529,7 +552,17 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     double lambda = 0.0, dl = nominal;
     auto t_increment = std::chrono::steady_clock::now();
     int done = 0, attempts = 0;
-    while (lambda < 1.0 - 1e-12) {
+    // Relax steps (with contact): every increment is a proximal-point step, a drag towards the
+    // increment's start whose stiffness starts at the weave's, is halved after each easy
+    // increment and quadrupled after a failed one. The step ends once the loads are applied
+    // (lambda = 1) and the drag's force at the end of an increment is below relax_tolerance
+    // times the reference force: the state is then an equilibrium without drag.
+    const bool relax = st.kind == StepSpec::Kind::Relax && m_contact && opt.relax_drag > 0.0;
+    const double k0 = m_contact ? m_contact->initial_stiffness() : 0.0;
+    const double relax_max = std::max(opt.weave_drag, opt.relax_drag) * k0, relax_min = 1e-9 * k0;
+    if (relax) m_relax_drag = opt.relax_drag * k0;
+    bool relaxed = !relax;
+    while (lambda < 1.0 - 1e-12 || !relaxed) {
       dl = std::min(dl, 1.0 - lambda);
       const VecX saved = m_q;
       m_q_start = m_q;
@@ -555,8 +588,11 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         if (m_contact && m_problem->set_contacts(saved_contacts, m_contact->friction()))
           m_linear->analyze(m_problem->pattern());
         ++m_stats.cuts;
-        const int cuts_here = static_cast<int>(std::round(std::log2(nominal / dl)));
-        if (cuts_here >= opt.max_cuts || attempts >= max_increments) {
+        // Relax: a stiffer drag first (at lambda = 1 nothing else can be cut).
+        const bool stiffer = relax && m_relax_drag < relax_max;
+        if (relax) m_relax_drag = std::min(4.0 * m_relax_drag, relax_max);
+        const int cuts_here = dl > 0.0 ? static_cast<int>(std::round(std::log2(nominal / dl))) : opt.max_cuts;
+        if ((cuts_here >= opt.max_cuts && !stiffer) || attempts >= max_increments) {
           result.status = RunResult::Status::Failed;
           result.step = st.name;
           result.load_factor = lambda;
@@ -569,8 +605,19 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
               opt.residual_tolerance);
           return result;
         }
-        dl *= 0.5;
+        if (!stiffer) dl *= 0.5;
         continue;
+      }
+      if (relax) {
+        // Drag force left at the end of the increment, relative to the reference force.
+        double sum = 0.0;
+        for (Index d = 0; d < m_q.size(); ++d) {
+          const double u = (m_q[d] - m_q_start[d]) * m_length_scale[d];
+          sum += u * u;
+        }
+        m_relax_residual = m_relax_drag * std::sqrt(sum) / std::max(m_reference_force, 1e-300);
+        relaxed = lambda + dl >= 1.0 - 1e-12 && m_relax_residual <= opt.relax_tolerance;
+        if (iterations <= 30) m_relax_drag = std::max(0.5 * m_relax_drag, relax_min);
       }
       lambda += dl;
       if (1.0 - lambda < 1e-12) lambda = 1.0;
@@ -587,7 +634,8 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       info.residual = residual;
       info.wall_time = seconds_since(t_start);
       info.increment_time = seconds_since(t_increment);
-      info.step_end = lambda >= 1.0;
+      info.step_end = lambda >= 1.0 && relaxed;
+      info.relax_residual = relax ? m_relax_residual : 0.0;
       info.reactions = reactions(m_gradient);
       if (m_bodies) {
         info.binding_updates = m_binding_updates;

@@ -34,6 +34,7 @@ struct IncrementInfo {
   int binding_updates = 0;        ///< augmented-Lagrangian multiplier updates
   int limited_steps = 0;          ///< Newton steps scaled down to the step limit in this increment
   double binding_violation = 0;   ///< largest binding condition |g| at the accepted state [m]
+  double relax_residual = 0;      ///< relax steps: the drag's force, relative to the reference force
 };
 
 /// Counters and timings of a run.
@@ -119,9 +120,10 @@ class StaticSolver {
   int m_binding_updates = 0;  // in the current increment
   double m_max_step = 0;      // largest nodal motion per Newton iteration [m]; 0 = no limit
   std::vector<std::pair<int, int>> m_fiber_tow;  // per fiber: (0 warp / 1 weft / -1 none, tow index)
-  double m_weave_depth = -1;
-  bool m_proximal = false;     // relax step: proximal drag loop in equilibrium()
-  double m_proximal_drag = 0;  // its stiffness per node [N/m]  // penetration between crossing tows at the weave step's start [m]
+  double m_weave_depth = -1;     // penetration between crossing tows at the weave step's start [m]
+  double m_relax_drag = 0;       // relax steps: drag stiffness per node of the next increment [N/m]
+  double m_reference_force = 0;  // reference force of the last Newton iteration [N]
+  double m_relax_residual = 0;   // relax steps: drag force at the end of the last increment, relative
   SolverStats m_stats;
   std::function<void(const std::string&)> m_progress;
 };
