@@ -240,9 +240,15 @@ int slice(const std::string& dir, const std::vector<std::string>& plane_texts, c
 
 int main(int argc, char** argv) {
   // OpenMP threads that spin after a parallel region starve CHOLMOD's BLAS threads on small
-  // machines; libgomp reads its wait policy at load time, so set it and start again.
-  if (std::getenv("OMP_WAIT_POLICY") == nullptr) {
-    setenv("OMP_WAIT_POLICY", "passive", 1);
+  // machines; libgomp reads its wait policy at load time, so set it and start again. OpenBLAS's
+  // own threads spin (sched_yield) between the many small BLAS calls of a supernodal
+  // factorization and take the cores from fibra's OpenMP threads: a single-threaded BLAS is
+  // twice as fast on the 2-core machine (docs/performance.md). Both stay as the user sets them.
+  const bool wait_policy = std::getenv("OMP_WAIT_POLICY") != nullptr;
+  const bool blas_threads = std::getenv("OPENBLAS_NUM_THREADS") != nullptr;
+  if (!wait_policy || !blas_threads) {
+    if (!wait_policy) setenv("OMP_WAIT_POLICY", "passive", 1);
+    if (!blas_threads) setenv("OPENBLAS_NUM_THREADS", "1", 1);
     execv("/proc/self/exe", argv);
   }
   CLI::App app{"fibra: woven fabrics and fiber assemblies simulated at the scale of their fibers"};

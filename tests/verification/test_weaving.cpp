@@ -6,7 +6,6 @@
 //  - the crossing tows no longer interpenetrate (largest penetration below 0.1 r);
 //  - both directions are crimped (the fabric report's crimp, > 0.5 %), and the fabric is
 //    thicker than one tow.
-// (The relax step that should follow does not converge yet: docs/theory/fabric.md, Status.)
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -84,6 +83,115 @@ TEST(Weaving, PlainWeaveStepSeparatesTheTowsInThePatternsOrder) {
   EXPECT_GT(rep.warp_crimp, 0.005);
   EXPECT_GT(rep.weft_crimp, 0.005);
   EXPECT_GT(rep.thickness, 0.25e-3);
+}
+
+// Weave, then relax with friction (METHOD §6): a 2 x 2 plain weave of three glass fibers per
+// tow, friction 0.2, the free edges pulled by 0.5 N per fiber. The weave step is frictionless
+// and dragged (a pseudo-process); the relax step, with the usual normals and friction, is a
+// sequence of proximal-point increments that ends when the drag's force is below 1e-6 of the
+// reference force. Read from the solved state:
+//  - the edge bodies' forces balance (sum over the four edges): the fabric is in equilibrium
+//    without any drag, to 1e-5 of the applied tension; at the end of the weave step they do
+//    not (the drag holds the fabric there: tens of newtons);
+//  - every crossing keeps the pattern's order, with no interpenetration;
+//  - the relaxed fabric is still crimped in both directions, less than at the end of the
+//    weave step (the tension straightens the tows until the crossings hold them).
+const char* kPlainFriction = R"(
+[[material]]
+name = "glass"
+young = 72e9
+poisson = 0.22
+[fabric]
+pattern = "plain"
+warp = { tows = 2, spacing = 1.0e-3 }
+weft = { tows = 2, spacing = 1.0e-3 }
+margin = 0.5e-3
+tension = 0.5
+  [fabric.tow]
+  fibers = 3
+  width = 0.7e-3
+  thickness = 0.25e-3
+  [fabric.fiber]
+  radius = 5.0e-5
+  material = "glass"
+  element_length = 1.25e-4
+[contact]
+friction = 0.2
+elastic_slip = 5e-7
+[[step]]
+name = "weave"
+kind = "weave"
+increments = 10
+[[step]]
+name = "relax"
+kind = "relax"
+increments = 10
+)";
+
+TEST(Weaving, PlainWeaveWithFrictionRelaxesToEquilibrium) {
+  const test::Solved s = test::solve_toml(kPlainFriction, "plain_friction.toml");
+  ASSERT_TRUE(s.converged()) << s.result.message;
+  ASSERT_EQ(s.step_end_info.size(), 2u);
+  const IncrementInfo& woven = s.step_end_info[0];
+  const IncrementInfo& relaxed = s.step_end_info[1];
+  EXPECT_LE(relaxed.relax_residual, 1e-6);
+  // Sum of the forces of the four edge bodies on the fabric.
+  auto edge_sum = [&](const IncrementInfo& info) {
+    Vec3 sum = Vec3::Zero();
+    for (size_t b = 0; b < s.model.bodies.size(); ++b)
+      if (s.model.bodies[b].name.rfind("edge.", 0) == 0) sum += info.bodies[b].force;
+    return sum;
+  };
+  const double pull = 0.5 * 3 * 2;  // N per fiber x fibers per tow x tows, on edge.x+ (and y+)
+  const int xp = s.model.body_index("edge.x+"), yp = s.model.body_index("edge.y+");
+  ASSERT_GE(xp, 0);
+  ASSERT_GE(yp, 0);
+  EXPECT_NEAR(relaxed.bodies[xp].force.x(), pull, 1e-6 * pull);
+  EXPECT_NEAR(relaxed.bodies[yp].force.y(), pull, 1e-6 * pull);
+  const Vec3 balance = edge_sum(relaxed);
+  std::printf("relaxed: edge forces sum to (%.3e, %.3e, %.3e) N; at the end of the weave step (%.3e, %.3e, %.3e) N\n",
+              balance.x(), balance.y(), balance.z(), edge_sum(woven).x(), edge_sum(woven).y(), edge_sum(woven).z());
+  EXPECT_LT(balance.norm(), 1e-5 * pull);
+  EXPECT_GT(edge_sum(woven).norm(), pull);  // the drag carried the weave step's forces
+
+  // Pattern order at every crossing, at the relaxed state.
+  const double r = 5e-5;
+  auto tow_z = [&](const TowSpec& tow, double along) {
+    double z = 0;
+    for (const std::string& name : tow.fibers) {
+      const Fiber& f = s.model.fibers[s.model.fiber_index(name)];
+      const int axis = tow.direction == TowSpec::Direction::Warp ? 0 : 1;
+      Index best = 0;
+      for (Index k = 0; k < f.num_nodes; ++k)
+        if (std::abs(s.q[9 * (f.first_node + k) + axis] - along) < std::abs(s.q[9 * (f.first_node + best) + axis] - along))
+          best = k;
+      z += s.q[9 * (f.first_node + best) + 2] / static_cast<double>(tow.fibers.size());
+    }
+    return z;
+  };
+  int crossings = 0;
+  for (const TowSpec& warp : s.c.tows)
+    for (const TowSpec& weft : s.c.tows) {
+      if (warp.direction != TowSpec::Direction::Warp || weft.direction != TowSpec::Direction::Weft) continue;
+      const double x = (weft.index - 0.5) * 1e-3, y = (warp.index - 0.5) * 1e-3;
+      const double zw = tow_z(warp, x), zf = tow_z(weft, y);
+      EXPECT_EQ(zw > zf, warp_above(s.c.weave, warp.index, weft.index)) << warp.name << " x " << weft.name;
+      EXPECT_GT(std::abs(zw - zf), r) << warp.name << " x " << weft.name;
+      ++crossings;
+    }
+  EXPECT_EQ(crossings, 4);
+  EXPECT_LT(relaxed.contact.max_penetration_ratio, 0.1);
+
+  const FabricReport before = fabric_report(s.c, s.model, s.step_end_states[0], nullptr, nullptr);
+  const FabricReport after = fabric_report(s.c, s.model, s.q, nullptr, nullptr);
+  std::printf("crimp warp %.5f -> %.5f, weft %.5f -> %.5f; thickness %.4g -> %.4g m\n", before.warp_crimp,
+              after.warp_crimp, before.weft_crimp, after.weft_crimp, before.thickness, after.thickness);
+  EXPECT_GT(after.warp_crimp, 0.002);
+  EXPECT_GT(after.weft_crimp, 0.002);
+  EXPECT_LT(after.warp_crimp, before.warp_crimp);
+  EXPECT_LT(after.weft_crimp, before.weft_crimp);
+  // A symmetric pattern, tows and loads: warp and weft alike.
+  EXPECT_NEAR(after.warp_crimp, after.weft_crimp, 0.05 * after.warp_crimp);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 // CHOLMOD back end: supernodal LL^T with METIS ordering, symbolic analysis reused.
 #include <cholmod.h>
+#include <omp.h>
 
 #include <stdexcept>
 
@@ -41,7 +42,15 @@ class CholmodSolver final : public LinearSolver {
   FactorStatus factorize(const std::vector<double>& values, double shift) override {
     cholmod_sparse a = wrap(values);
     double beta[2] = {shift, 0.0};
+    // CHOLMOD's supernodal factorization opens an OpenMP region per supernode copy (with a
+    // team size fixed when CHOLMOD was built): on a small machine with passive waiting that is a
+    // futex wake and a context switch per supernode, more than the copy. The dense supernode
+    // work goes to the threaded BLAS; the copies run on this thread.
+    // (The team size is fixed inside CHOLMOD, so the regions are made inactive instead.)
+    const int levels = omp_get_max_active_levels();
+    omp_set_max_active_levels(0);
     cholmod_factorize_p(&a, beta, nullptr, 0, m_factor, &m_common);
+    omp_set_max_active_levels(levels);
     if (m_common.status == CHOLMOD_NOT_POSDEF) return FactorStatus::NotPositiveDefinite;
     if (m_common.status < CHOLMOD_OK) return FactorStatus::Failed;
     return FactorStatus::Ok;
