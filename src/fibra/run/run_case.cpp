@@ -1,5 +1,6 @@
 #include "fibra/run/run_case.hpp"
 
+#include <algorithm>
 #include <omp.h>
 
 #include <fmt/format.h>
@@ -81,6 +82,11 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   if (solver.has_contact()) columns.insert(columns.end(), contact_columns.begin(), contact_columns.end());
   const BodySystem* bodies = solver.bodies();
   if (bodies) columns.insert(columns.end(), {"binding:updates", "binding:max_violation"});
+  // Relax steps: the drag force left at the end of each increment (0 in other steps).
+  const bool relax = solver.has_contact() && std::any_of(c.steps.begin(), c.steps.end(), [](const StepSpec& st) {
+                       return st.kind == StepSpec::Kind::Relax;
+                     });
+  if (relax) columns.push_back("relax:drag_residual");
   // Woven samples: the fabric report (model/fabric_report.hpp) per increment, O(nodes).
   const bool fabric = !c.tows.empty();
   if (fabric) columns.insert(columns.end(), {"fabric:warp_crimp", "fabric:weft_crimp", "fabric:thickness"});
@@ -115,6 +121,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                         info.increment_time - cs.detection_time});
     }
     if (bodies) row.extra.insert(row.extra.end(), {double(info.binding_updates), info.binding_violation});
+    if (relax) row.extra.push_back(info.relax_residual);
     if (rep) row.extra.insert(row.extra.end(), {rep->warp_crimp, rep->weft_crimp, rep->thickness});
     if (rep && info.step_end) {
       const StepSpec::Kind kind = c.steps[info.step_index].kind;
