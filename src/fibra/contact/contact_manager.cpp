@@ -1,5 +1,3 @@
-#include <fmt/format.h>
-#include <cstdlib>
 #include "fibra/contact/contact_manager.hpp"
 
 #include <algorithm>
@@ -128,19 +126,6 @@ double ContactManager::update_normals(std::vector<ContactElement>& contacts, con
     const double len = d.norm();
     fresh[k] = len > 0.0 ? Vec3(d / len) : c.normal;
     turn = std::max(turn, std::acos(std::clamp(fresh[k].dot(c.normal), -1.0, 1.0)));
-  }
-  if (std::getenv("FIBRA_DEBUG_NORMALS")) {
-    size_t w = 0;
-    double wt = -1;
-    for (size_t k = 0; k < contacts.size(); ++k) {
-      const double t = std::acos(std::clamp(fresh[k].dot(contacts[k].normal), -1.0, 1.0));
-      if (t > wt) { wt = t; w = k; }
-    }
-    const ContactElement& c = contacts[w];
-    const Vec3 d = section_centre(m_model, c.b, q) - section_centre(m_model, c.a, q);
-    fmt::print(stderr, "   worst normal: element {} fibers {}-{} elements {}-{} eta {:.3f} {:.3f} zone {} turn {:.3e} centre distance {:.3e} old n {} {} {} new n {} {} {}\n",
-      w, m_model.elements[c.a.element].fiber, m_model.elements[c.b.element].fiber, c.a.element, c.b.element, c.a.eta, c.b.eta, c.zone, wt, d.norm(),
-      c.normal.x(), c.normal.y(), c.normal.z(), fresh[w].x(), fresh[w].y(), fresh[w].z());
   }
   if (turn >= m_spec.normal_tolerance)
     for (size_t k = 0; k < contacts.size(); ++k) contacts[k].normal = fresh[k];

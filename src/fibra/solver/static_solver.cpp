@@ -35,6 +35,12 @@ struct StaticSolver::Program {
 };
 
 namespace {
+// FIBRA_DEBUG_NEWTON set: every Newton iteration, normal update and cone freeze is printed.
+bool debug_newton() {
+  static const bool on = std::getenv("FIBRA_DEBUG_NEWTON") != nullptr;
+  return on;
+}
+
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -262,7 +268,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       ++m_contact_stats.normal_updates;
       const double turn = m_contact->update_normals(m_problem->contacts(), m_q);
       const double cone_change = freeze ? freeze_cones() : 0.0;
-      if (std::getenv("FIBRA_DEBUG_NEWTON"))
+      if (debug_newton())
         fmt::print(stderr, " normals turned {:.3e} rad, friction cones changed {:.3e}, {} elements\n", turn, cone_change,
                    m_problem->contacts().size());
       if (turn < spec.normal_tolerance && cone_change <= spec.normal_tolerance) {
@@ -314,7 +320,6 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
 bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, double& residual) {
   iterations = 0;
   const double tolerance = m_case.solver.binding_tolerance * m_model.length_scale;
-  const double settle = m_case.solver.displacement_tolerance * m_model.length_scale;
   if (m_bodies) m_bodies->set_anchors(m_q);
   for (int update = 0;; ++update) {
     int its = 0;
@@ -375,7 +380,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     }
     const double fref = std::max({std::sqrt(ext), std::sqrt(react), force_floor});
     m_reference_force = fref;
-    if (std::getenv("FIBRA_DEBUG_NEWTON")) {
+    if (debug_newton()) {
       Index wr = 0;
       for (Index d = 0; d < n; ++d)
         if (std::abs(m_force_scale[d] * r[d]) > std::abs(m_force_scale[wr] * r[wr])) wr = d;
@@ -472,7 +477,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
         last_step = std::abs(alpha * dq[d]) * m_length_scale[d];
         worst = d;
       }
-    if (std::getenv("FIBRA_DEBUG_NEWTON"))
+    if (debug_newton())
       fmt::print(stderr, "  it {:2d} residual {:.3e} shift {:.2e} alpha {:.3f} step {:.3e} at dof {} (group {}) drag {:.2e}\n",
                  iterations, residual, shift, alpha, last_step, worst, m_problem->pattern().group_of_dof(worst),
                  m_problem->drag());
@@ -553,14 +558,14 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     auto t_increment = std::chrono::steady_clock::now();
     int done = 0, attempts = 0;
     // Relax steps (with contact): every increment is a proximal-point step, a drag towards the
-    // increment's start whose stiffness starts at the weave's, is halved after each easy
+    // increment's start whose stiffness starts at relax_drag x k0, is halved after each easy
     // increment and quadrupled after a failed one. The step ends once the loads are applied
     // (lambda = 1) and the drag's force at the end of an increment is below relax_tolerance
     // times the reference force: the state is then an equilibrium without drag.
     const bool relax = st.kind == StepSpec::Kind::Relax && m_contact && opt.relax_drag > 0.0;
     const double k0 = m_contact ? m_contact->initial_stiffness() : 0.0;
     const double relax_max = std::max(opt.weave_drag, opt.relax_drag) * k0, relax_min = 1e-9 * k0;
-    if (relax) m_relax_drag = opt.relax_drag * k0;
+    m_relax_drag = relax ? opt.relax_drag * k0 : 0.0;
     bool relaxed = !relax;
     while (lambda < 1.0 - 1e-12 || !relaxed) {
       dl = std::min(dl, 1.0 - lambda);
