@@ -290,6 +290,8 @@ void write_solver(std::string& out, const SolverSpec& s) {
   out += fmt::format("weave_drag = {}\n", number(s.weave_drag));
   out += fmt::format("relax_drag = {}\n", number(s.relax_drag));
   out += fmt::format("relax_tolerance = {}\n", number(s.relax_tolerance));
+  out += fmt::format("krylov_iterations = {}\n", s.krylov_iterations);
+  out += fmt::format("krylov_tolerance = {}\n", number(s.krylov_tolerance));
 }
 
 void write_contact(std::string& out, const ContactSpec& c) {

@@ -191,6 +191,8 @@ struct SolverSpec {
   double weave_drag = 1.0;                ///< drag per node in weave steps, relative to the contact penalty
   double relax_drag = 1e-2;               ///< initial proximal drag per node in relax steps, relative to it
   double relax_tolerance = 1e-6;          ///< relax steps end when the drag's force is below this (relative)
+  int krylov_iterations = 20;             ///< CG iterations preconditioned by the last factorization; 0 = factorize every iteration
+  double krylov_tolerance = 1e-8;         ///< CG stops at this residual relative to the Newton residual
   double max_step = -1;                   ///< largest motion per Newton iteration [m]; < 0 = automatic (half the smallest radius with contact, none without), 0 = none
   double binding_tolerance = 1e-8;        ///< largest binding violation, relative to the model size
   int max_binding_updates = 30;           ///< multiplier updates per increment (augmented Lagrangian)

@@ -235,6 +235,8 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                  {"cuts", s.cuts},
                  {"factorizations", s.factorizations},
                  {"regularized_factorizations", s.regularized_factorizations},
+                 {"reused_factorizations", s.reused_factorizations},
+                 {"krylov_iterations", s.krylov_iterations},
                  {"line_search_trials", s.line_search_trials},
                  {"roundoff_convergences", s.roundoff_convergences},
                  {"binding_updates", s.binding_updates},

@@ -27,19 +27,27 @@ class CholmodSolver final : public LinearSolver {
   }
   ~CholmodSolver() override {
     if (m_factor) cholmod_free_factor(&m_factor, &m_common);
+    for (cholmod_dense** d : {&m_x, &m_y, &m_e})
+      if (*d) cholmod_free_dense(d, &m_common);
     cholmod_finish(&m_common);
   }
 
   void analyze(const BlockPattern& pattern) override {
-    if (m_factor) cholmod_free_factor(&m_factor, &m_common);
     m_pattern = &pattern;
-    m_dummy.assign(pattern.nonzeros(), 0.0);
-    cholmod_sparse a = wrap(m_dummy);
-    m_factor = cholmod_analyze(&a, &m_common);
-    if (!m_factor) throw std::runtime_error("CHOLMOD analysis failed");
+    m_pending = true;
   }
 
   FactorStatus factorize(const std::vector<double>& values, double shift) override {
+    if (m_pending) {
+      if (m_factor) cholmod_free_factor(&m_factor, &m_common);
+      m_factored = false;
+      m_dummy.assign(m_pattern->nonzeros(), 0.0);
+      cholmod_sparse pattern = wrap(m_dummy);
+      m_factor = cholmod_analyze(&pattern, &m_common);
+      if (!m_factor) throw std::runtime_error("CHOLMOD analysis failed");
+      m_pending = false;
+    }
+    m_factored = false;
     cholmod_sparse a = wrap(values);
     double beta[2] = {shift, 0.0};
     // CHOLMOD's supernodal factorization opens an OpenMP region per supernode copy (with a
@@ -53,10 +61,14 @@ class CholmodSolver final : public LinearSolver {
     omp_set_max_active_levels(levels);
     if (m_common.status == CHOLMOD_NOT_POSDEF) return FactorStatus::NotPositiveDefinite;
     if (m_common.status < CHOLMOD_OK) return FactorStatus::Failed;
+    m_factored = true;
     return FactorStatus::Ok;
   }
 
+  bool has_factor() const override { return m_factored; }
+
   void solve(const VecX& b, VecX& x) override {
+    if (!m_factored) throw std::logic_error("CHOLMOD solve without a factorization");
     cholmod_dense rhs;
     rhs.nrow = b.size();
     rhs.ncol = 1;
@@ -66,10 +78,10 @@ class CholmodSolver final : public LinearSolver {
     rhs.z = nullptr;
     rhs.xtype = CHOLMOD_REAL;
     rhs.dtype = CHOLMOD_DOUBLE;
-    cholmod_dense* sol = cholmod_solve(CHOLMOD_A, m_factor, &rhs, &m_common);
-    if (!sol) throw std::runtime_error("CHOLMOD solve failed");
-    x = Eigen::Map<const VecX>(static_cast<double*>(sol->x), b.size());
-    cholmod_free_dense(&sol, &m_common);
+    // solve2 keeps its solution and work arrays between calls (repeated preconditioner solves).
+    if (!cholmod_solve2(CHOLMOD_A, m_factor, &rhs, nullptr, &m_x, nullptr, &m_y, &m_e, &m_common))
+      throw std::runtime_error("CHOLMOD solve failed");
+    x = Eigen::Map<const VecX>(static_cast<double*>(m_x->x), b.size());
   }
 
   std::string name() const override { return "cholmod"; }
@@ -94,6 +106,9 @@ class CholmodSolver final : public LinearSolver {
 
   cholmod_common m_common{};
   cholmod_factor* m_factor = nullptr;
+  cholmod_dense *m_x = nullptr, *m_y = nullptr, *m_e = nullptr;  // solve2's solution and work arrays
+  bool m_pending = false;   // a new pattern waits for its analysis (next factorize)
+  bool m_factored = false;  // m_factor holds a successful numeric factorization
   const BlockPattern* m_pattern = nullptr;
   std::vector<double> m_dummy;
 };

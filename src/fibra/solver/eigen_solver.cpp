@@ -15,17 +15,24 @@ class EigenSolver final : public LinearSolver {
  public:
   void analyze(const BlockPattern& pattern) override {
     m_pattern = &pattern;
-    std::vector<double> zeros(pattern.nonzeros(), 0.0);
-    m_ldlt.analyzePattern(map(zeros));
+    m_pending = true;
   }
   FactorStatus factorize(const std::vector<double>& values, double shift) override {
+    if (m_pending) {
+      std::vector<double> zeros(m_pattern->nonzeros(), 0.0);
+      m_ldlt.analyzePattern(map(zeros));
+      m_pending = false;
+    }
+    m_factored = false;
     m_ldlt.setShift(shift);
     m_ldlt.factorize(map(values));
     if (m_ldlt.info() != Eigen::Success) return FactorStatus::Failed;
     // LL^T semantics: report non-positive pivots as not positive definite.
     if ((m_ldlt.vectorD().array() <= 0.0).any()) return FactorStatus::NotPositiveDefinite;
+    m_factored = true;
     return FactorStatus::Ok;
   }
+  bool has_factor() const override { return m_factored; }
   void solve(const VecX& b, VecX& x) override { x = m_ldlt.solve(b); }
   std::string name() const override { return "eigen"; }
 
@@ -36,6 +43,8 @@ class EigenSolver final : public LinearSolver {
                m_pattern->row_idx().data(), values.data());
   }
   const BlockPattern* m_pattern = nullptr;
+  bool m_pending = false;   // a new pattern waits for its analysis (next factorize)
+  bool m_factored = false;  // the last factorization succeeded
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double, Eigen::ColMajor, int>, Eigen::Upper> m_ldlt;
 };
 

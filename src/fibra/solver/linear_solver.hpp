@@ -17,11 +17,15 @@ enum class FactorStatus { Ok, NotPositiveDefinite, Failed };
 class LinearSolver {
  public:
   virtual ~LinearSolver() = default;
-  /// Symbolic analysis (ordering, elimination tree); reused until the pattern changes.
+  /// Symbolic analysis (ordering, elimination tree) of a new pattern, reused until the pattern
+  /// changes. Done at the next factorize(): until then solve() still uses the last factor (of
+  /// the old pattern's matrix: the Newton solver preconditions with it).
   virtual void analyze(const BlockPattern& pattern) = 0;
   /// Numeric factorization of A + shift * I with A's upper-triangle values.
   virtual FactorStatus factorize(const std::vector<double>& values, double shift) = 0;
-  /// Solves A x = b with the last factorization.
+  /// True when the last factorization succeeded (solve() may be called).
+  virtual bool has_factor() const = 0;
+  /// Solves A x = b with the last successful factorization.
   virtual void solve(const VecX& b, VecX& x) = 0;
   /// Short name ("cholmod", "eigen").
   virtual std::string name() const = 0;

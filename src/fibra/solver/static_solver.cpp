@@ -9,6 +9,7 @@
 
 #include "fibra/core/error.hpp"
 #include "fibra/model/fabric.hpp"
+#include "fibra/solver/krylov.hpp"
 
 namespace fibra {
 
@@ -258,6 +259,12 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       return largest > 0.0 ? change / largest : 0.0;
     };
     if (freeze) freeze_cones();
+    // Pseudo-time increments (weave and relax steps) do not iterate the normals and cones to
+    // their fixed point: one solve, then both are updated for the next increment (a lag like
+    // the drag's). Once a relax step's drag force is negligible, its increments iterate them
+    // (a slow creep would turn the normals a little at every lagged increment); the step ends
+    // at an increment where they did not move.
+    const bool lagged = weave || (relax && !m_relax_settling);
     for (int k = 0; k < spec.max_normal_updates; ++k) {
       int its = 0;
       if (!equilibrium(history, its, residual)) {
@@ -271,7 +278,8 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       if (debug_newton())
         fmt::print(stderr, " normals turned {:.3e} rad, friction cones changed {:.3e}, {} elements\n", turn, cone_change,
                    m_problem->contacts().size());
-      if (turn < spec.normal_tolerance && cone_change <= spec.normal_tolerance) {
+      m_normals_settled = turn < spec.normal_tolerance && cone_change <= spec.normal_tolerance;
+      if (m_normals_settled || lagged) {
         normals_settled = true;
         break;
       }
@@ -354,6 +362,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
   const double length = m_model.length_scale;
   double last_step = std::numeric_limits<double>::infinity();
   bool prev_small_step = false;
+  bool damped = false;  // the last step came from a factorization with a non-negligible shift
   // Floor for the reference force: the force that strains the stiffest fiber by 1e-5. Round-off
   // in the internal forces is about eps * E A per dof, so residuals relative to a smaller
   // reference (an unloaded step) could never converge.
@@ -398,7 +407,8 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     // section stiffness forces. Two successive negligible corrections with a residual that no
     // longer falls and is near the tolerance mean the solution is as exact as doubles allow.
     const size_t h = history.size();
-    if (small_step && prev_small_step && h >= 2 && history[h - 1] > 0.5 * history[h - 2] &&
+    // (Not after a shifted factorization: its steps are damped, small by construction.)
+    if (small_step && prev_small_step && !damped && h >= 2 && history[h - 1] > 0.5 * history[h - 2] &&
         residual <= 1e3 * opt.residual_tolerance) {
       ++m_stats.roundoff_convergences;
       return true;
@@ -407,28 +417,51 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     if (iterations >= opt.max_iterations) return false;
     if (iterations >= 4 && residual > 1e6 * history.front() && history.front() > 0) return false;
 
-    // Factorize (shifted if the tangent is not positive definite) and solve H dq = -r.
+    // Solve H dq = -r. First by conjugate gradients preconditioned with the last factorization
+    // (of an earlier tangent, maybe of another contact pattern), when there is one of the
+    // unshifted tangent and the last such solve was quick; else, or when they do not converge
+    // within krylov_iterations, factorize (shifted if the tangent is not positive definite,
+    // which conjugate gradients may not notice).
     auto t0 = std::chrono::steady_clock::now();
-    double mean_diag = 0.0;
-    for (Index d = 0; d < n; ++d) mean_diag += std::abs(m_hessian[m_problem->pattern().col_ptr()[d + 1] - 1]);
-    mean_diag /= std::max<Index>(n, 1);
     double shift = 0.0;
-    FactorStatus st = m_linear->factorize(m_hessian, shift);
-    ++m_stats.factorizations;
-    while (st == FactorStatus::NotPositiveDefinite && shift < mean_diag) {
-      shift = shift == 0.0 ? 1e-14 * mean_diag : shift * 100.0;
-      st = m_linear->factorize(m_hessian, shift);
-      ++m_stats.factorizations;
-      ++m_stats.regularized_factorizations;
+    bool solved = false;
+    m_rhs = -r;
+    if (opt.krylov_iterations > 0 && m_reuse_factor && m_linear->has_factor()) {
+      const PcgResult cg = pcg(
+          m_problem->pattern(), m_hessian, 0.0, m_rhs, dq, [this](const VecX& b, VecX& x) { m_linear->solve(b, x); },
+          m_force_scale, opt.krylov_tolerance, opt.krylov_iterations, m_pcg);
+      m_stats.krylov_iterations += cg.iterations;
+      solved = cg.converged;
+      if (solved) ++m_stats.reused_factorizations;
+      // A slow solve: the factor has aged, the next iteration makes a new one.
+      m_reuse_factor = solved && 2 * cg.iterations <= opt.krylov_iterations;
+      m_stats.time_solve += seconds_since(t0);
     }
-    m_stats.time_factorization += seconds_since(t0);
-    m_stats.factor_nonzeros = m_linear->factor_nonzeros();
-    if (st != FactorStatus::Ok) return false;
-    t0 = std::chrono::steady_clock::now();
-    m_linear->solve(-r, dq);
+    if (!solved) {
+      t0 = std::chrono::steady_clock::now();
+      double mean_diag = 0.0;
+      for (Index d = 0; d < n; ++d) mean_diag += std::abs(m_hessian[m_problem->pattern().col_ptr()[d + 1] - 1]);
+      mean_diag /= std::max<Index>(n, 1);
+      FactorStatus st = m_linear->factorize(m_hessian, shift);
+      ++m_stats.factorizations;
+      while (st == FactorStatus::NotPositiveDefinite && shift < mean_diag) {
+        shift = shift == 0.0 ? 1e-14 * mean_diag : shift * 100.0;
+        st = m_linear->factorize(m_hessian, shift);
+        ++m_stats.factorizations;
+        ++m_stats.regularized_factorizations;
+      }
+      m_stats.time_factorization += seconds_since(t0);
+      m_stats.factor_nonzeros = m_linear->factor_nonzeros();
+      if (st != FactorStatus::Ok) return false;
+      // Only the factor of a (nearly) unshifted tangent preconditions later iterations.
+      m_reuse_factor = shift <= 1e-10 * mean_diag;
+      damped = !m_reuse_factor;
+      t0 = std::chrono::steady_clock::now();
+      m_linear->solve(m_rhs, dq);
+      m_stats.time_solve += seconds_since(t0);
+    }
     for (Index d = 0; d < n; ++d)
       if (fixed[d]) dq[d] = 0.0;
-    m_stats.time_solve += seconds_since(t0);
     ++m_stats.iterations;
 
     // Full Newton steps while the residual falls. Linearized rotations stretch the section
@@ -566,6 +599,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     const double k0 = m_contact ? m_contact->initial_stiffness() : 0.0;
     const double relax_max = std::max(opt.weave_drag, opt.relax_drag) * k0, relax_min = 1e-9 * k0;
     m_relax_drag = relax ? opt.relax_drag * k0 : 0.0;
+    m_relax_settling = false;
     bool relaxed = !relax;
     while (lambda < 1.0 - 1e-12 || !relaxed) {
       dl = std::min(dl, 1.0 - lambda);
@@ -621,8 +655,14 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
           sum += u * u;
         }
         m_relax_residual = m_relax_drag * std::sqrt(sum) / std::max(m_reference_force, 1e-300);
-        relaxed = lambda + dl >= 1.0 - 1e-12 && m_relax_residual <= opt.relax_tolerance;
-        if (iterations <= 30) m_relax_drag = std::max(0.5 * m_relax_drag, relax_min);
+        const bool loaded = lambda + dl >= 1.0 - 1e-12;
+        relaxed = loaded && m_relax_residual <= opt.relax_tolerance && m_normals_settled;
+        m_relax_settling = loaded && m_relax_residual <= opt.relax_tolerance;
+        // Easy increments: the drag falls, faster the easier they were.
+        if (iterations <= 12)
+          m_relax_drag = std::max(0.25 * m_relax_drag, relax_min);
+        else if (iterations <= 30)
+          m_relax_drag = std::max(0.5 * m_relax_drag, relax_min);
       }
       lambda += dl;
       if (1.0 - lambda < 1e-12) lambda = 1.0;

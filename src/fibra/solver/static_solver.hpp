@@ -10,6 +10,7 @@
 #include "fibra/contact/contact_manager.hpp"
 #include "fibra/model/case.hpp"
 #include "fibra/model/model.hpp"
+#include "fibra/solver/krylov.hpp"
 #include "fibra/solver/linear_solver.hpp"
 #include "fibra/solver/problem.hpp"
 
@@ -48,6 +49,8 @@ struct SolverStats {
   int roundoff_convergences = 0;  ///< increments accepted at the round-off floor of the residual
   int binding_updates = 0;        ///< augmented-Lagrangian multiplier updates
   int limited_steps = 0;          ///< Newton steps scaled down to the step limit
+  int reused_factorizations = 0;  ///< Newton iterations solved by CG preconditioned with an earlier factor
+  int krylov_iterations = 0;      ///< conjugate-gradient iterations (all Newton solves)
   double time_assembly = 0;
   double time_factorization = 0;
   double time_solve = 0;
@@ -122,6 +125,11 @@ class StaticSolver {
   std::vector<std::pair<int, int>> m_fiber_tow;  // per fiber: (0 warp / 1 weft / -1 none, tow index)
   double m_weave_depth = -1;     // penetration between crossing tows at the weave step's start [m]
   double m_relax_drag = 0;       // relax steps: drag stiffness per node of the next increment [N/m]
+  bool m_normals_settled = true;  // the last increment's normals and friction cones were a fixed point
+  bool m_reuse_factor = false;    // the last factorization may precondition the next Newton solve
+  VecX m_rhs;                     // right-hand side of the Newton solve
+  PcgWorkspace m_pcg;             // conjugate gradients' work vectors
+  bool m_relax_settling = false;  // relax steps: the drag is negligible, normals iterated to their fixed point
   double m_reference_force = 0;  // reference force of the last Newton iteration [N]
   double m_relax_residual = 0;   // relax steps: drag force at the end of the last increment, relative
   SolverStats m_stats;

@@ -1,0 +1,99 @@
+#include "fibra/solver/krylov.hpp"
+
+#include <omp.h>
+
+#include <cmath>
+
+namespace fibra {
+
+void symmetric_multiply(const BlockPattern& pattern, const std::vector<double>& values, double shift, const VecX& x,
+                        VecX& y, std::vector<VecX>& scratch) {
+  const Index n = pattern.rows();
+  const int* col = pattern.col_ptr().data();
+  const int* row = pattern.row_idx().data();
+  const int threads = omp_get_max_threads();
+  if (static_cast<int>(scratch.size()) != threads || (threads > 0 && scratch[0].size() != n))
+    scratch.assign(threads, VecX::Zero(n));
+  y.resize(n);
+  // Column j holds rows i <= j: y_j gathers a_ij x_i (no conflict), y_i receives a_ij x_j
+  // (scattered: into the thread's own vector, summed afterwards).
+#pragma omp parallel
+  {
+    VecX& acc = scratch[omp_get_thread_num()];
+    acc.setZero();
+#pragma omp for schedule(static)
+    for (Index j = 0; j < n; ++j) {
+      const double xj = x[j];
+      double gather = 0.0;
+      const int end = col[j + 1];
+      for (int k = col[j]; k < end; ++k) {
+        const Index i = row[k];
+        const double a = values[k];
+        if (i == j) {
+          gather += (a + shift) * xj;
+        } else {
+          gather += a * x[i];
+          acc[i] += a * xj;
+        }
+      }
+      acc[j] += gather;
+    }
+#pragma omp for schedule(static)
+    for (Index i = 0; i < n; ++i) {
+      double s = 0.0;
+      for (const VecX& v : scratch) s += v[i];
+      y[i] = s;
+    }
+  }
+}
+
+PcgResult pcg(const BlockPattern& pattern, const std::vector<double>& values, double shift, const VecX& b, VecX& x,
+              const std::function<void(const VecX&, VecX&)>& precondition, const VecX& weight, double tolerance,
+              int max_iterations, PcgWorkspace& ws) {
+  PcgResult out;
+  const double bnorm = b.cwiseProduct(weight).norm();
+  precondition(b, x);
+  if (!(bnorm > 0.0)) {
+    x.setZero();
+    out.converged = true;
+    return out;
+  }
+  symmetric_multiply(pattern, values, shift, x, ws.ap, ws.scratch);
+  ws.r = b - ws.ap;
+  double res = ws.r.cwiseProduct(weight).norm() / bnorm;
+  out.relative_residual = res;
+  if (!std::isfinite(res)) return out;
+  if (res <= tolerance) {
+    out.converged = true;
+    return out;
+  }
+  precondition(ws.r, ws.z);
+  ws.p = ws.z;
+  double rz = ws.r.dot(ws.z);
+  for (int k = 0; k < max_iterations; ++k) {
+    symmetric_multiply(pattern, values, shift, ws.p, ws.ap, ws.scratch);
+    const double curvature = ws.p.dot(ws.ap);
+    if (!(curvature > 0.0) || !(rz > 0.0)) {
+      out.breakdown = true;
+      return out;
+    }
+    const double alpha = rz / curvature;
+    x += alpha * ws.p;
+    ws.r -= alpha * ws.ap;
+    out.iterations = k + 1;
+    res = ws.r.cwiseProduct(weight).norm() / bnorm;
+    out.relative_residual = res;
+    if (!std::isfinite(res)) return out;
+    if (res <= tolerance) {
+      out.converged = true;
+      return out;
+    }
+    precondition(ws.r, ws.z);
+    const double rz_next = ws.r.dot(ws.z);
+    ws.p = ws.z + (rz_next / rz) * ws.p;
+    rz = rz_next;
+  }
+  return out;
+}
+
+}  // namespace fibra

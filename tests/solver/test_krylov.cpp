@@ -1,0 +1,193 @@
+// Conjugate gradients preconditioned with a factorization (solver/krylov.hpp), the lazy
+// analysis of the linear solvers that keeps the last factor usable, and the Newton solver's
+// reuse of factorizations: same converged states as factorizing at every iteration.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "fibra/solver/krylov.hpp"
+#include "fibra/solver/linear_solver.hpp"
+#include "verification/verification_support.hpp"
+
+namespace fibra::test {
+namespace {
+
+// A chain of 12 groups of 3 dofs, each coupled to the next two: a banded block pattern.
+struct Chain {
+  StencilSet stencils;
+  std::unique_ptr<BlockPattern> pattern;
+  Chain() {
+    for (Index g = 0; g + 2 < 12; ++g) {
+      const Index s[3] = {g, g + 1, g + 2};
+      stencils.add(s);
+    }
+    stencils.colorize(12, 2);
+    pattern = std::make_unique<BlockPattern>(std::vector<int>(12, 3), std::vector<const StencilSet*>{&stencils});
+  }
+  Index n() const { return pattern->rows(); }
+  // Upper-triangle values of the dense symmetric matrix `a` (entries outside the pattern are
+  // dropped: `a` is built inside it).
+  std::vector<double> values(const Eigen::MatrixXd& a) const {
+    std::vector<double> v(pattern->nonzeros(), 0.0);
+    for (Index j = 0; j < n(); ++j)
+      for (Index i = 0; i <= j; ++i)
+        if (const Index k = pattern->find(i, j); k >= 0) v[k] = a(i, j);
+    return v;
+  }
+  // A random symmetric matrix inside the pattern, with `diagonal` added on the diagonal.
+  Eigen::MatrixXd random(unsigned seed, double diagonal) const {
+    std::mt19937 gen(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n(), n());
+    for (Index j = 0; j < n(); ++j)
+      for (Index i = 0; i <= j; ++i)
+        if (pattern->find(i, j) >= 0) a(i, j) = a(j, i) = u(gen);
+    a.diagonal().array() += diagonal;
+    return a;
+  }
+};
+
+TEST(Krylov, SymmetricMultiplyMatchesTheDenseProduct) {
+  const Chain c;
+  const Eigen::MatrixXd a = c.random(1, 0.0);
+  const VecX x = VecX::LinSpaced(c.n(), -1.0, 2.0);
+  VecX y;
+  std::vector<VecX> scratch;
+  symmetric_multiply(*c.pattern, c.values(a), 0.5, x, y, scratch);
+  const VecX expected = a * x + 0.5 * x;
+  EXPECT_LT((y - expected).norm(), 1e-13 * expected.norm());
+}
+
+TEST(Krylov, ConjugateGradientsSolveAnSpdSystem) {
+  const Chain c;
+  const Eigen::MatrixXd a = c.random(2, 8.0);  // diagonally dominant: SPD
+  ASSERT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(a).eigenvalues().minCoeff(), 0.0);
+  const VecX b = VecX::LinSpaced(c.n(), 1.0, -3.0);
+  const VecX exact = a.ldlt().solve(b);
+  const VecX weight = VecX::Ones(c.n());
+  PcgWorkspace ws;
+  VecX x;
+  // Unpreconditioned: converges within n iterations, to the tolerance asked.
+  auto identity = [](const VecX& r, VecX& z) { z = r; };
+  const PcgResult plain = pcg(*c.pattern, c.values(a), 0.0, b, x, identity, weight, 1e-10, c.n(), ws);
+  EXPECT_TRUE(plain.converged);
+  EXPECT_FALSE(plain.breakdown);
+  EXPECT_GT(plain.iterations, 1);
+  EXPECT_LE(plain.relative_residual, 1e-10);
+  EXPECT_LT((x - exact).norm(), 1e-8 * exact.norm());
+  // Preconditioned by the exact inverse: the start x = M^-1 b is the solution.
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt = a.ldlt();
+  auto exact_inverse = [&](const VecX& r, VecX& z) { z = ldlt.solve(r); };
+  const PcgResult direct = pcg(*c.pattern, c.values(a), 0.0, b, x, exact_inverse, weight, 1e-10, 5, ws);
+  EXPECT_TRUE(direct.converged);
+  EXPECT_EQ(direct.iterations, 0);
+  // Preconditioned by the factor of a nearby matrix (an earlier tangent): a few iterations.
+  const Eigen::MatrixXd nearby = a + 0.05 * c.random(3, 0.0);
+  const Eigen::LDLT<Eigen::MatrixXd> old = nearby.ldlt();
+  auto aged = [&](const VecX& r, VecX& z) { z = old.solve(r); };
+  const PcgResult reused = pcg(*c.pattern, c.values(a), 0.0, b, x, aged, weight, 1e-10, 20, ws);
+  EXPECT_TRUE(reused.converged);
+  EXPECT_LT(reused.iterations, plain.iterations);
+  EXPECT_LT((x - exact).norm(), 1e-8 * exact.norm());
+  // The shift is part of the operator.
+  const PcgResult shifted = pcg(*c.pattern, c.values(a), 2.0, b, x, identity, weight, 1e-10, c.n(), ws);
+  EXPECT_TRUE(shifted.converged);
+  const VecX exact_shifted = (a + 2.0 * Eigen::MatrixXd::Identity(c.n(), c.n())).ldlt().solve(b);
+  EXPECT_LT((x - exact_shifted).norm(), 1e-8 * exact_shifted.norm());
+  // Not converged within the iterations allowed: reported, with the last iterate.
+  const PcgResult short_run = pcg(*c.pattern, c.values(a), 0.0, b, x, identity, weight, 1e-14, 2, ws);
+  EXPECT_FALSE(short_run.converged);
+  EXPECT_EQ(short_run.iterations, 2);
+  EXPECT_GT(short_run.relative_residual, 1e-14);
+}
+
+TEST(Krylov, NegativeCurvatureIsABreakdown) {
+  const Chain c;
+  const Eigen::MatrixXd a = -c.random(4, 8.0);  // negative definite
+  const VecX b = VecX::Ones(c.n());
+  PcgWorkspace ws;
+  VecX x;
+  auto identity = [](const VecX& r, VecX& z) { z = r; };
+  const PcgResult r = pcg(*c.pattern, c.values(a), 0.0, b, x, identity, VecX::Ones(c.n()), 1e-10, c.n(), ws);
+  EXPECT_FALSE(r.converged);
+  EXPECT_TRUE(r.breakdown);
+}
+
+// analyze() of a new pattern keeps the last factor usable until the next factorization.
+TEST(Krylov, LastFactorSurvivesANewPattern) {
+  for (const char* kind : {"cholmod", "eigen"}) {
+    const Chain c;
+    const Eigen::MatrixXd a = c.random(5, 8.0);
+    std::unique_ptr<LinearSolver> s = make_linear_solver(kind);
+    s->analyze(*c.pattern);
+    EXPECT_FALSE(s->has_factor()) << kind;
+    ASSERT_EQ(s->factorize(c.values(a), 0.0), FactorStatus::Ok) << kind;
+    EXPECT_TRUE(s->has_factor()) << kind;
+    const VecX b = VecX::LinSpaced(c.n(), 1.0, 2.0);
+    VecX x;
+    s->solve(b, x);
+    EXPECT_LT((a * x - b).norm(), 1e-12 * b.norm()) << kind;
+    // A wider pattern (every group coupled to the next three): the old factor still solves.
+    Chain wide;
+    for (Index g = 0; g + 3 < 12; ++g) {
+      const Index st[2] = {g, g + 3};
+      wide.stencils.add(st);
+    }
+    wide.stencils.colorize(12, 2);
+    wide.pattern = std::make_unique<BlockPattern>(std::vector<int>(12, 3), std::vector<const StencilSet*>{&wide.stencils});
+    s->analyze(*wide.pattern);
+    EXPECT_TRUE(s->has_factor()) << kind;
+    VecX y;
+    s->solve(b, y);
+    EXPECT_LT((y - x).norm(), 1e-14 * x.norm()) << kind;
+    // The next factorization analyses the new pattern.
+    const Eigen::MatrixXd w = wide.random(6, 10.0);
+    ASSERT_EQ(s->factorize(wide.values(w), 0.0), FactorStatus::Ok) << kind;
+    s->solve(b, y);
+    EXPECT_LT((w * y - b).norm(), 1e-12 * b.norm()) << kind;
+    // A failed factorization leaves no factor.
+    EXPECT_EQ(s->factorize(wide.values(-w), 0.0), FactorStatus::NotPositiveDefinite) << kind;
+    EXPECT_FALSE(s->has_factor()) << kind;
+  }
+}
+
+// The Newton solver with factorizations reused through conjugate gradients converges to the
+// same states as with a factorization at every iteration, with fewer factorizations. Two
+// crossed fibers pressed together with friction (contact, friction cones, new contact
+// patterns) and a bent cantilever.
+TEST(Krylov, NewtonReusingFactorizationsReachesTheSameStates) {
+  std::ifstream in(std::string(FIBRA_SOURCE_DIR) + "/examples/crossed_fibers/crossed_fibers.toml");
+  ASSERT_TRUE(in.good());
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string crossed = text.str();
+  const std::string cantilever = straight_cantilever(1.0, 0.001, 10, 210e9, 0.3, R"(
+[[step]]
+increments = 4
+  [[step.load]]
+  fiber = "beam"
+  node = "last"
+  force = [0, 0, -3.3e-1]
+)");
+  for (const std::string& base : {crossed, cantilever}) {
+    const Solved fresh = solve_toml(base + "\n[solver]\nkrylov_iterations = 0\n");
+    const Solved reuse = solve_toml(base);
+    ASSERT_TRUE(fresh.converged()) << fresh.result.message;
+    ASSERT_TRUE(reuse.converged()) << reuse.result.message;
+    EXPECT_EQ(fresh.stats.reused_factorizations, 0);
+    EXPECT_EQ(fresh.stats.krylov_iterations, 0);
+    EXPECT_GT(reuse.stats.reused_factorizations, 0);
+    EXPECT_LT(reuse.stats.factorizations, fresh.stats.factorizations);
+    const double scale = (fresh.q - fresh.model.reference).norm();
+    EXPECT_LT((reuse.q - fresh.q).norm(), 1e-6 * scale);
+    std::printf("factorizations %d -> %d, %d Newton iterations solved by CG (%d CG iterations)\n",
+                fresh.stats.factorizations, reuse.stats.factorizations, reuse.stats.reused_factorizations,
+                reuse.stats.krylov_iterations);
+  }
+}
+
+}  // namespace
+}  // namespace fibra::test
