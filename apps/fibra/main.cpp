@@ -38,18 +38,26 @@ int check(const std::string& path) {
   return 0;
 }
 
-int run(const std::string& path, std::string out, int threads) {
+int run(const std::string& path, std::string out, int threads, bool progress_lines) {
   const fibra::Case c = fibra::read_case(path);
   if (out.empty()) out = (std::filesystem::path("out") / c.name).string();
   fibra::RunOptions options;
   options.out_dir = out;
   options.threads = threads;
   const bool tty = interactive();
-  if (tty) options.progress = [](const std::string& line) { fmt::print(stderr, "\r\033[K{}", line); };
+  // On a terminal one progress line updated in place; with --progress one line per increment
+  // (for logs of long runs).
+  if (progress_lines)
+    options.progress = [](const std::string& line) {
+      fmt::print(stderr, "{}\n", line);
+      std::fflush(stderr);
+    };
+  else if (tty)
+    options.progress = [](const std::string& line) { fmt::print(stderr, "\r\033[K{}", line); };
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);
   const fibra::RunReport r = fibra::run_case(c, options);
-  if (tty) fmt::print(stderr, "\n");
+  if (tty && !progress_lines) fmt::print(stderr, "\n");
   const auto& s = r.stats;
   if (r.result.status == fibra::RunResult::Status::Converged) {
     fmt::print("{}: converged: {} increments, {} Newton iterations, {:.2f} s ({} nodes, {} dofs)\n", path,
@@ -259,6 +267,9 @@ int main(int argc, char** argv) {
   run_cmd->add_option("case", case_path, "case file")->required();
   run_cmd->add_option("--out", out, "output directory (default out/<case name>)");
   run_cmd->add_option("--threads", threads, "OpenMP threads (default: all cores)")->check(CLI::NonNegativeNumber);
+  bool progress_lines = false;
+  run_cmd->add_flag("--progress", progress_lines,
+                    "print one line per converged increment on stderr (default: one line updated in place, on a terminal only)");
   auto* check_cmd = app.add_subcommand("check", "validate a case file without running it");
   check_cmd->add_option("case", case_path, "case file")->required();
   auto* generate_cmd = app.add_subcommand(
@@ -277,7 +288,7 @@ int main(int argc, char** argv) {
   slice_cmd->add_option("--out", out, "file stem (default RESULT/slices/slice_<axis>_<value>)");
   CLI11_PARSE(app, argc, argv);
   try {
-    if (*run_cmd) return run(case_path, out, threads);
+    if (*run_cmd) return run(case_path, out, threads, progress_lines);
     if (*generate_cmd) return generate(case_path, out);
     if (*slice_cmd) return slice(result_dir, planes, out);
     return check(case_path);

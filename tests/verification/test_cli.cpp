@@ -103,6 +103,21 @@ std::string replace(std::string text, const std::string& from, const std::string
   return text;
 }
 
+// Without a terminal a run prints no progress; with --progress one line per increment.
+TEST_F(Cli, ProgressLinesOnRequest) {
+  write("good.toml", replace(kGood, "[[step]]", "[[step]]\nincrements = 3"));
+  const Result quiet = fibra("run good.toml --out quiet");
+  EXPECT_EQ(quiet.code, 0) << quiet.err;
+  EXPECT_EQ(quiet.err, "");
+  const Result r = fibra("run good.toml --out loud --progress");
+  EXPECT_EQ(r.code, 0) << r.err;
+  int lines = 0;
+  for (size_t at = r.err.find("step 1"); at != std::string::npos; at = r.err.find("step 1", at + 1)) ++lines;
+  EXPECT_EQ(lines, 3) << r.err;
+  EXPECT_NE(r.err.find("load 1.0000"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 3) << r.err;
+}
+
 TEST_F(Cli, CheckAcceptsTheExample) {
   const Result r = fibra("check '" + std::string(FIBRA_SOURCE_DIR) + "/examples/cantilever/cantilever.toml'");
   EXPECT_EQ(r.code, 0) << r.err;
