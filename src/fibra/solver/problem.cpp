@@ -131,7 +131,7 @@ double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hes
     for (Index n = 0; n < model.num_nodes(); ++n)
       for (int d = 0; d < kNodeDofs; ++d) {
         const Index dof = kNodeDofs * n + d;
-        const double c = d < 3 ? m_drag : m_drag * m_node_r2[n];
+        const double c = d < 3 ? m_drag : m_drag * m_drag_director * m_node_r2[n];
         const double u = q[dof] - m_drag_anchor[dof];
         energy += 0.5 * c * u * u;
         if (gradient) (*gradient)[dof] += c * u;

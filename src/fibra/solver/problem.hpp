@@ -48,14 +48,17 @@ class Problem {
   /// Evaluated state of every contact element at q (same order as contacts()).
   std::vector<ContactResponse> contact_responses(const VecX& q) const;
 
-  /// Drag (weave steps): energy c/2 sum over nodes of |x0 - a|^2 + r^2 (|g1 - a1|^2 + |g2 - a2|^2)
-  /// towards the anchor state `anchor` (the increment's start); c = 0 removes it.
-  void set_drag(double c, const VecX& anchor) {
+  /// Drag (weave and relax steps): energy c/2 sum over nodes of |x0 - a|^2 + w r^2 (|g1 - a1|^2 +
+  /// |g2 - a2|^2) towards the anchor state `anchor` (the increment's start), w = `director_weight`
+  /// (1: the section boundary's motion); c = 0 removes it.
+  void set_drag(double c, const VecX& anchor, double director_weight = 1.0) {
     m_drag = c;
     m_drag_anchor = anchor;
+    m_drag_director = director_weight;
   }
   const VecX& drag_anchor() const { return m_drag_anchor; }  ///< anchor of the drag
   double drag() const { return m_drag; }                      ///< drag stiffness per node [N/m]
+  double drag_director_weight() const { return m_drag_director; }  ///< w of the section vectors' drag
   /// Sets the state from which moment work is measured in evaluate()'s energy (moment
   /// potentials are only defined up to whole turns, so energies are compared near this state).
   void set_energy_base(const VecX& q) { m_energy_base = q; }
@@ -80,6 +83,7 @@ class Problem {
   std::vector<double> m_energy_buffer;
   std::vector<double> m_contact_energy_buffer;
   VecX m_energy_base;
+  double m_drag_director = 1.0;
   double m_drag = 0;
   VecX m_drag_anchor;
   std::vector<double> m_node_r2;  // squared section radius per node

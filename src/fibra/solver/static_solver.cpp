@@ -36,6 +36,8 @@ struct StaticSolver::Program {
 };
 
 namespace {
+constexpr double kWeaveDirectorDrag = 100.0;  // weight of the section vectors' drag in weave steps
+
 // FIBRA_DEBUG_NEWTON set: every Newton iteration, normal update and cone freeze is printed.
 bool debug_newton() {
   static const bool on = std::getenv("FIBRA_DEBUG_NEWTON") != nullptr;
@@ -208,7 +210,12 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   const double k0 = m_contact->initial_stiffness();
   // Relax: each increment is a proximal-point step, a drag of adaptive stiffness (run())
   // towards the increment's start.
-  m_problem->set_drag(weave ? m_case.solver.weave_drag * k0 : relax ? m_relax_drag : 0.0, m_q_start);
+  // In weave steps the section vectors are dragged 100 times harder than their boundary's
+  // motion: a frictionless fiber's rigid spin about its axis has no other stiffness, and with
+  // the r^2 weight (5.8e-5 N/m per node on the 480-fiber sample) any shift of an indefinite
+  // tangent swamped it and stalled Newton (docs/theory/fabric.md).
+  m_problem->set_drag(weave ? m_case.solver.weave_drag * k0 : relax ? m_relax_drag : 0.0, m_q_start,
+                      weave ? kWeaveDirectorDrag : 1.0);
 
   // METHOD §4: (1) contact elements, repeated while the set changes; (2) normals, repeated
   // while they turn; (3) Newton on the rest. A zone that penetrates too deep gets a stiffer
