@@ -5,6 +5,7 @@
 /// sums are reproducible whatever the thread count.
 #include <Eigen/Core>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 #include "fibra/solver/block_pattern.hpp"
@@ -85,7 +86,9 @@ void scatter_local(const AssemblyTarget& t, std::span<const Index> groups, const
 }
 
 /// Assembles every stencil of `set`: kernel(s, LocalVec* g, LocalMat* h) returns the energy
-/// of stencil s and fills g, h when non-null. Returns the total energy (summed in order).
+/// of stencil s and fills g, h when non-null. A kernel taking a fourth argument `bool& scatter`
+/// may set it to false when its g and h are exactly zero (nothing to add: the scatter is
+/// skipped). Returns the total energy (summed in order).
 template <class LocalVec, class LocalMat, class Kernel>
 double assemble_set(const StencilSet& set, const AssemblyTarget& t, bool want_gradient, bool want_hessian,
                     std::vector<double>& energy_buffer, Kernel&& kernel) {
@@ -96,8 +99,12 @@ double assemble_set(const StencilSet& set, const AssemblyTarget& t, bool want_gr
     LocalVec g;
     LocalMat h;
     auto one = [&](Index s) {
-      energy_buffer[s] = kernel(s, want_gradient ? &g : nullptr, want_hessian ? &h : nullptr);
-      scatter_local(t, set.stencil(s), want_gradient ? &g : nullptr, want_hessian ? &h : nullptr);
+      bool scatter = true;
+      if constexpr (std::is_invocable_v<Kernel&, Index, LocalVec*, LocalMat*, bool&>)
+        energy_buffer[s] = kernel(s, want_gradient ? &g : nullptr, want_hessian ? &h : nullptr, scatter);
+      else
+        energy_buffer[s] = kernel(s, want_gradient ? &g : nullptr, want_hessian ? &h : nullptr);
+      if (scatter) scatter_local(t, set.stencil(s), want_gradient ? &g : nullptr, want_hessian ? &h : nullptr);
     };
     // Partitions: one thread sweeps one contiguous range of the matrix.
 #pragma omp for schedule(dynamic, 1)

@@ -107,7 +107,7 @@ double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hes
   if (!m_contacts.empty()) {
     energy += assemble_set<ContactVec, ContactMat>(
         m_contact_pairs, target, gradient != nullptr, hessian != nullptr, m_contact_energy_buffer,
-        [&](Index s, ContactVec* g, ContactMat* h) {
+        [&](Index s, ContactVec* g, ContactMat* h, bool& scatter) {
           // Element a < element b, so the stencil's groups ascend and the scatter reads only
           // upper blocks: the kernel accumulates just those.
           double e = 0.0;
@@ -119,6 +119,9 @@ double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hes
                                         q.data() + model.elements[c.b.element].first_dof, m_friction, g, h, nullptr,
                                         false, true);
           }
+          // Pairs within the detection distance that do not touch (and carry no friction) add
+          // nothing: most of them in a tow, where every neighbour is a candidate.
+          scatter = (g && !g->isZero(0.0)) || (h && !h->isZero(0.0));
           return e;
         });
   }
