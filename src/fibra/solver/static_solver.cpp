@@ -308,7 +308,10 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     for (size_t k = 0; !weave && same && k < contacts.size(); ++k)
       if (contacts[k].fresh) same = m_contact->penetration_ratio({contacts[k]}, m_q) <= 0.0;
     same = weave || (same && m_contact->penetration_ratio(contacts, m_q) <= 1.0);
-    if (same && raised == 0) {
+    // Pseudo-time increments lag the penalty raises like the normals: the raised penalties act
+    // from the next increment (a relax step ends only once nothing is raised any more).
+    if (lagged && raised > 0) m_normals_settled = false;
+    if (same && (raised == 0 || lagged)) {
       // Fibers that went through each other within the increment: cut it (not while
       // weaving, where crossing tows pass through each other by design).
       if (!weave && m_contact->crossed(m_q_start, m_q)) return false;
