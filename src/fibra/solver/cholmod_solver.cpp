@@ -40,7 +40,6 @@ class CholmodSolver final : public LinearSolver {
   FactorStatus factorize(const std::vector<double>& values, double shift) override {
     if (m_pending) {
       if (m_factor) cholmod_free_factor(&m_factor, &m_common);
-      m_factored = false;
       m_dummy.assign(m_pattern->nonzeros(), 0.0);
       cholmod_sparse pattern = wrap(m_dummy);
       m_factor = cholmod_analyze(&pattern, &m_common);

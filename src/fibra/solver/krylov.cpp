@@ -19,6 +19,8 @@ void symmetric_multiply(const BlockPattern& pattern, const std::vector<double>& 
   // (scattered: into the thread's own vector, summed afterwards).
 #pragma omp parallel
   {
+    // The team may be smaller than the largest: only its vectors are zeroed and summed.
+    const int team = omp_get_num_threads();
     VecX& acc = scratch[omp_get_thread_num()];
     acc.setZero();
 #pragma omp for schedule(static)
@@ -41,7 +43,7 @@ void symmetric_multiply(const BlockPattern& pattern, const std::vector<double>& 
 #pragma omp for schedule(static)
     for (Index i = 0; i < n; ++i) {
       double s = 0.0;
-      for (const VecX& v : scratch) s += v[i];
+      for (int t = 0; t < team; ++t) s += scratch[t][i];
       y[i] = s;
     }
   }
@@ -58,15 +60,15 @@ PcgResult pcg(const BlockPattern& pattern, const std::vector<double>& values, do
     out.converged = true;
     return out;
   }
+  // Records the weighted residual of ws.r; true when CG stops (converged or not finite).
+  auto done = [&]() {
+    out.relative_residual = ws.r.cwiseProduct(weight).norm() / bnorm;
+    out.converged = out.relative_residual <= tolerance;
+    return out.converged || !std::isfinite(out.relative_residual);
+  };
   symmetric_multiply(pattern, values, shift, x, ws.ap, ws.scratch);
   ws.r = b - ws.ap;
-  double res = ws.r.cwiseProduct(weight).norm() / bnorm;
-  out.relative_residual = res;
-  if (!std::isfinite(res)) return out;
-  if (res <= tolerance) {
-    out.converged = true;
-    return out;
-  }
+  if (done()) return out;
   precondition(ws.r, ws.z);
   ws.p = ws.z;
   double rz = ws.r.dot(ws.z);
@@ -81,13 +83,7 @@ PcgResult pcg(const BlockPattern& pattern, const std::vector<double>& values, do
     x += alpha * ws.p;
     ws.r -= alpha * ws.ap;
     out.iterations = k + 1;
-    res = ws.r.cwiseProduct(weight).norm() / bnorm;
-    out.relative_residual = res;
-    if (!std::isfinite(res)) return out;
-    if (res <= tolerance) {
-      out.converged = true;
-      return out;
-    }
+    if (done()) return out;
     precondition(ws.r, ws.z);
     const double rz_next = ws.r.dot(ws.z);
     ws.p = ws.z + (rz_next / rz) * ws.p;

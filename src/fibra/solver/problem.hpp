@@ -58,7 +58,6 @@ class Problem {
   }
   const VecX& drag_anchor() const { return m_drag_anchor; }  ///< anchor of the drag
   double drag() const { return m_drag; }                      ///< drag stiffness per node [N/m]
-  double drag_director_weight() const { return m_drag_director; }  ///< w of the section vectors' drag
   /// Sets the state from which moment work is measured in evaluate()'s energy (moment
   /// potentials are only defined up to whole turns, so energies are compared near this state).
   void set_energy_base(const VecX& q) { m_energy_base = q; }

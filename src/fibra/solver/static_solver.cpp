@@ -601,10 +601,11 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     auto t_increment = std::chrono::steady_clock::now();
     int done = 0, attempts = 0;
     // Relax steps (with contact): every increment is a proximal-point step, a drag towards the
-    // increment's start whose stiffness starts at relax_drag x k0, is halved after each easy
-    // increment and quadrupled after a failed one. The step ends once the loads are applied
-    // (lambda = 1) and the drag's force at the end of an increment is below relax_tolerance
-    // times the reference force: the state is then an equilibrium without drag.
+    // increment's start whose stiffness starts at relax_drag x k0, is divided by 4 or 2 after an
+    // easy increment and quadrupled after a failed one. The step ends once the loads are applied
+    // (lambda = 1), the drag's force at the end of an increment is below relax_tolerance times
+    // the reference force and the increment's normals, cones and penalties did not move: the
+    // state is then an equilibrium without drag.
     const bool relax = st.kind == StepSpec::Kind::Relax && m_contact && opt.relax_drag > 0.0;
     const double k0 = m_contact ? m_contact->initial_stiffness() : 0.0;
     const double relax_max = std::max(opt.weave_drag, opt.relax_drag) * k0, relax_min = 1e-9 * k0;
