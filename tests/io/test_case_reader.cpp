@@ -1210,7 +1210,7 @@ TEST(CaseReaderFabric, ExpandsTheFabric) {
   }
   EXPECT_EQ(c.bodies.size(), 4u * 2 + 4);
   EXPECT_EQ(c.bindings.size(), 4u * 2 + 4);
-  EXPECT_EQ(c.steps[0].bodies.size(), 4u);  // the four edges
+  EXPECT_EQ(c.steps[0].bodies.size(), 4u + 4u * 2);  // the four edges and the tow ends (held in rotation)
   EXPECT_TRUE(c.steps[1].bodies.empty());
 }
 
@@ -1265,7 +1265,8 @@ name = "pull"
   // An edge a step lists gets no default conditions in the first step.
   std::vector<std::string> first;
   for (const BodyStepSpec& b : c.steps[0].bodies) first.push_back(b.name);
-  EXPECT_EQ(first, (std::vector<std::string>{"edge.x-", "edge.x+", "edge.y-"}));
+  EXPECT_EQ(first, (std::vector<std::string>{"edge.x-", "edge.x+", "edge.y-", "warp0.start", "warp0.end", "warp1.start",
+                                             "warp1.end", "weft0.start", "weft0.end", "weft1.start", "weft1.end"}));
 }
 
 TEST(CaseReaderFabric, JsonGivesTheSameCaseAsToml) {

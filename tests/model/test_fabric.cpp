@@ -123,6 +123,24 @@ kind = "weave"
       EXPECT_EQ(b.bodies.size(), 3u);
       EXPECT_EQ(b.bodies.front(), "warp0.end");
     }
+  // First-step conditions: the x-/y- edges held, the x+/y+ edges free along their tows under
+  // the tension; every tow end held in rotation and free in position.
+  const StepSpec& first = c.steps.front();
+  ASSERT_EQ(first.bodies.size(), 4u + 2u * 7u);
+  int tow_ends = 0;
+  for (const BodyStepSpec& b : first.bodies) {
+    EXPECT_TRUE(b.has_rotation) << b.name;
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(b.rotation[k], std::optional<double>(0.0)) << b.name;
+    if (b.name.rfind("edge.", 0) == 0) {
+      EXPECT_TRUE(b.has_displacement) << b.name;
+      EXPECT_EQ(b.force.has_value(), b.name == "edge.x+" || b.name == "edge.y+") << b.name;
+    } else {
+      EXPECT_FALSE(b.has_displacement) << b.name;
+      EXPECT_FALSE(b.force.has_value()) << b.name;
+      ++tow_ends;
+    }
+  }
+  EXPECT_EQ(tow_ends, 14);
   // Spacing below the tow width, or more fibers than fit: errors naming the key.
   auto error_of = [](const std::string& text) {
     try {
@@ -151,6 +169,45 @@ name = "s"
             "fabric.warp.spacing");
   EXPECT_EQ(error_of(base + "[fabric.warp]\ntows = 2\nspacing = 1e-3\n[fabric.tow]\nfibers = 500\nwidth = 0.7e-3\nthickness = 0.25e-3\n"),
             "fabric.warp.tow.fibers");
+}
+
+// A tow end (or edge) the user lists in any step keeps the user's conditions: the expansion
+// adds its defaults only for the bodies no step mentions.
+TEST(FabricExpansion, UserConditionsOnATowEndReplaceTheDefault) {
+  const Case c = parse_case_toml(R"(
+[[material]]
+name = "glass"
+young = 72e9
+poisson = 0.22
+[fabric]
+pattern = "plain"
+warp = { tows = 2, spacing = 1.0e-3 }
+weft = { tows = 2, spacing = 1.0e-3 }
+  [fabric.tow]
+  fibers = 3
+  width = 0.7e-3
+  thickness = 0.25e-3
+  [fabric.fiber]
+  radius = 5.0e-5
+  material = "glass"
+  element_length = 2.0e-4
+[[step]]
+name = "weave"
+kind = "weave"
+  [[step.body]]
+  name = "weft1.end"
+  rotation = ["free", "free", 0]
+)", "fabric.toml");
+  int entries = 0;
+  for (const BodyStepSpec& b : c.steps.front().bodies) {
+    if (b.name != "weft1.end") continue;
+    ++entries;
+    EXPECT_FALSE(b.rotation[0].has_value());
+    EXPECT_FALSE(b.rotation[1].has_value());
+    EXPECT_EQ(b.rotation[2], std::optional<double>(0.0));
+  }
+  EXPECT_EQ(entries, 1);
+  EXPECT_EQ(c.steps.front().bodies.size(), 4u + 8u);
 }
 
 }  // namespace

@@ -352,6 +352,24 @@ void expand_fabric(Case& c) {
       }
       first.bodies.push_back(b);
     }
+    // Tow ends held in rotation, free in position: a grip does not let a tow end turn in it.
+    // The averaged rotation of a group of fiber ends is only as well defined as the group is
+    // far from a line, and a tow end flattens as the fabric relaxes (12 fibers in a tow 0.8 mm
+    // wide fit in one layer): the best-fit rotation about the flattened end's long axis then
+    // costs nearly nothing, the edge binding only ties the sum of its tow ends' rotations, and
+    // the tow ends of one edge turned in opposite senses without end (1.6 rad after 260 relax
+    // increments of a 2 x 2 sample of 12 fibers per tow, which never reached equilibrium; held,
+    // it relaxed in 39). docs/theory/fabric.md, "Tow ends".
+    for (const TowSpec& tow : c.tows)
+      for (const char* end : {".start", ".end"}) {
+        const std::string name = tow.name + end;
+        if (listed(name)) continue;
+        BodyStepSpec b;
+        b.name = name;
+        b.has_rotation = true;
+        b.rotation = {0.0, 0.0, 0.0};
+        first.bodies.push_back(b);
+      }
   }
 }
 

@@ -36,7 +36,7 @@ struct StaticSolver::Program {
 };
 
 namespace {
-constexpr double kWeaveDirectorDrag = 100.0;  // weight of the section vectors' drag in weave steps
+constexpr double kDirectorDrag = 100.0;  // weight of the section vectors' drag in weave and relax steps
 
 // FIBRA_DEBUG_NEWTON set: every Newton iteration, normal update and cone freeze is printed.
 bool debug_newton() {
@@ -210,12 +210,13 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   const double k0 = m_contact->initial_stiffness();
   // Relax: each increment is a proximal-point step, a drag of adaptive stiffness (run())
   // towards the increment's start.
-  // In weave steps the section vectors are dragged 100 times harder than their boundary's
-  // motion: a frictionless fiber's rigid spin about its axis has no other stiffness, and with
-  // the r^2 weight (5.8e-5 N/m per node on the 480-fiber sample) any shift of an indefinite
-  // tangent swamped it and stalled Newton (docs/theory/fabric.md).
+  // In weave and relax steps the section vectors are dragged 100 times harder than their
+  // boundary's motion: a fiber's rigid spin about its axis has no other stiffness where
+  // friction does not hold it, and with the r^2 weight (5.8e-5 N/m per node on the 480-fiber
+  // sample) any shift of an indefinite tangent swamped it and stalled Newton; in relax steps,
+  // the spin of the fibers near a tow end diverged as the drag fell (docs/theory/fabric.md).
   m_problem->set_drag(weave ? m_case.solver.weave_drag * k0 : relax ? m_relax_drag : 0.0, m_q_start,
-                      weave ? kWeaveDirectorDrag : 1.0);
+                      weave || relax ? kDirectorDrag : 1.0);
 
   // METHOD §4: (1) contact elements, repeated while the set changes; (2) normals, repeated
   // while they turn; (3) Newton on the rest. A zone that penetrates too deep gets a stiffer
@@ -662,7 +663,8 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         // Drag force left at the end of the increment, relative to the reference force.
         double sum = 0.0;
         for (Index d = 0; d < m_q.size(); ++d) {
-          const double u = (m_q[d] - m_q_start[d]) * m_length_scale[d];
+          const bool director = d < m_model.node_dofs && d % kNodeDofs >= 3;
+          const double u = (m_q[d] - m_q_start[d]) * m_length_scale[d] * (director ? kDirectorDrag : 1.0);
           sum += u * u;
         }
         m_relax_residual = m_relax_drag * std::sqrt(sum) / std::max(m_reference_force, 1e-300);
