@@ -145,6 +145,9 @@ inline void expect_same_case(const Case& a, const Case& b, bool compare_fabric =
     EXPECT_EQ(x.kind, y.kind) << w;
     EXPECT_EQ(x.increments, y.increments) << w;
     EXPECT_EQ(x.max_increments, y.max_increments) << w;
+    EXPECT_EQ(x.strain, y.strain) << w;
+    EXPECT_EQ(x.ratio, y.ratio) << w;
+    EXPECT_EQ(x.angle, y.angle) << w;
     ASSERT_EQ(x.loads.size(), y.loads.size()) << w;
     for (std::size_t k = 0; k < x.loads.size(); ++k) {
       const std::string v = w + ".load[" + std::to_string(k) + "]";
@@ -190,6 +193,8 @@ inline void expect_same_case(const Case& a, const Case& b, bool compare_fabric =
   expect_same_double(s.binding_stiffness, t.binding_stiffness, "solver.binding_stiffness");
   expect_same_double(s.weave_drag, t.weave_drag, "solver.weave_drag");
   expect_same_double(s.relax_drag, t.relax_drag, "solver.relax_drag");
+  expect_same_double(s.relax_tolerance, t.relax_tolerance, "solver.relax_tolerance");
+  expect_same_double(s.test_tolerance, t.test_tolerance, "solver.test_tolerance");
 
   const ContactSpec& p = a.contact;
   const ContactSpec& q = b.contact;

@@ -1,4 +1,5 @@
 #include "fibra/io/case_reader.hpp"
+#include "fibra/io/case_writer.hpp"
 
 #include <gtest/gtest.h>
 
@@ -603,6 +604,8 @@ const std::vector<BadCase> kBadCases = {
     {"KrylovIterationsNegative", "max_cuts = 5", "max_cuts = 5\nkrylov_iterations = -1",
      "solver.krylov_iterations", "must be >= 0"},
     {"KrylovToleranceOne", "max_cuts = 5", "max_cuts = 5\nkrylov_tolerance = 1.0", "solver.krylov_tolerance",
+     "expected a number in (0, 1)"},
+    {"TestToleranceOne", "max_cuts = 5", "max_cuts = 5\ntest_tolerance = 1", "solver.test_tolerance",
      "expected a number in (0, 1)"},
     {"LineSearchNotBool", "line_search = false", "line_search = 0", "solver.line_search",
      "expected a boolean"},
@@ -1269,6 +1272,51 @@ name = "pull"
                                              "warp1.end", "weft0.start", "weft0.end", "weft1.start", "weft1.end"}));
 }
 
+// The mechanical tests of a woven sample: biaxial (strain, ratio) and shear (angle) steps, and
+// "load" as the name of a standard step; written back (as a plain assembly) they read the same.
+TEST(CaseReaderFabric, BiaxialAndShearSteps) {
+  const std::string text = kFabric + R"(
+[[step]]
+name = "pull"
+kind = "biaxial"
+strain = 0.02
+ratio = 0.5
+
+[[step]]
+name = "uniaxial"
+kind = "biaxial"
+strain = 0.01
+ratio = 0
+
+[[step]]
+name = "shear"
+kind = "shear"
+angle = -25
+
+[[step]]
+name = "more"
+kind = "load"
+)";
+  const Case c = parse_case_toml(text, "fabric.toml");
+  ASSERT_EQ(c.steps.size(), 6u);
+  EXPECT_EQ(c.steps[2].kind, StepSpec::Kind::Biaxial);
+  EXPECT_EQ(c.steps[2].strain, 0.02);
+  EXPECT_EQ(c.steps[2].ratio, 0.5);
+  EXPECT_EQ(c.steps[3].ratio, 0.0);
+  EXPECT_EQ(c.steps[4].kind, StepSpec::Kind::Shear);
+  EXPECT_EQ(c.steps[4].angle, -25.0);
+  EXPECT_EQ(c.steps[5].kind, StepSpec::Kind::Standard);
+  EXPECT_EQ(c.steps[0].ratio, 1.0);  // defaults elsewhere
+  const Case back = parse_case_toml(write_case_toml(c), "written.toml");
+  ASSERT_EQ(back.steps.size(), c.steps.size());
+  for (size_t i = 0; i < c.steps.size(); ++i) {
+    EXPECT_EQ(back.steps[i].kind, c.steps[i].kind) << i;
+    EXPECT_EQ(back.steps[i].strain, c.steps[i].strain) << i;
+    EXPECT_EQ(back.steps[i].ratio, c.steps[i].ratio) << i;
+    EXPECT_EQ(back.steps[i].angle, c.steps[i].angle) << i;
+  }
+}
+
 TEST(CaseReaderFabric, JsonGivesTheSameCaseAsToml) {
   const Case from_toml = parse_case_toml(kFabric, "fabric.toml");
   const Case from_json = parse_case_json(to_json(kFabric), "fabric.json");
@@ -1567,7 +1615,24 @@ const std::vector<BadCase> kBadTowCases = {
      "unknown key \"matrx\" (did you mean \"matrix\"?)"},
     // Step kinds.
     {"UnknownKind", "kind = \"relax\"", "kind = \"relx\"", "step[1].kind",
-     "expected \"standard\", \"weave\" or \"relax\", got \"relx\" (did you mean \"relax\"?)"},
+     "expected \"load\" (or \"standard\"), \"weave\", \"relax\", \"biaxial\" or \"shear\", got \"relx\" (did you mean "
+     "\"relax\"?)"},
+    {"BiaxialWithoutStrain", "kind = \"relax\"", "kind = \"biaxial\"", "step[1].strain",
+     "a biaxial step needs `strain`"},
+    {"BiaxialWithoutEdges", "kind = \"relax\"", "kind = \"biaxial\"\nstrain = 0.01", "step[1].kind",
+     "a biaxial step drives the edge bodies of a fabric (edge.x-, edge.x+, edge.y-, edge.y+); there is no body "
+     "\"edge.x-\""},
+    {"AngleOnBiaxial", "kind = \"relax\"", "kind = \"biaxial\"\nstrain = 0.01\nangle = 5", "step[1].angle",
+     "`angle` belongs to kind = \"shear\" steps"},
+    {"StrainOnRelax", "kind = \"relax\"", "kind = \"relax\"\nstrain = 0.01", "step[1].strain",
+     "`strain` belongs to kind = \"biaxial\" steps"},
+    {"StrainZero", "kind = \"relax\"", "kind = \"biaxial\"\nstrain = 0", "step[1].strain",
+     "expected a strain in (-0.5, 0.5), not 0, got 0"},
+    {"RatioNegative", "kind = \"relax\"", "kind = \"biaxial\"\nstrain = 0.01\nratio = -1", "step[1].ratio",
+     "expected a ratio in [0, 10]"},
+    {"ShearWithoutAngle", "kind = \"relax\"", "kind = \"shear\"", "step[1].angle", "a shear step needs `angle`"},
+    {"ShearAngleZero", "kind = \"relax\"", "kind = \"shear\"\nangle = 0", "step[1].angle",
+     "expected an angle in degrees in (-80, 80), not 0, got 0"},
     {"KindNotString", "kind = \"relax\"", "kind = 1", "step[1].kind", "expected a string, got an integer"},
     {"WeaveStepWithoutTows", kTowA + "\n" + kTowB + "\n" + kTowC, "", "step[0].kind",
      "a weave step needs tows: define [[tow]] entries (or a [fabric])", false},

@@ -1194,7 +1194,8 @@ BodyStepSpec Reader::read_step_body(const Value& t, const std::string& path,
 
 StepSpec Reader::read_step(const Value& t, const std::string& path, std::size_t k,
                            const std::vector<FiberSpec>& fibers, const std::vector<BodySpec>& bodies) const {
-  check_keys(t, path, {"name", "kind", "increments", "max_increments", "load", "displacement", "body"});
+  check_keys(t, path,
+             {"name", "kind", "increments", "max_increments", "load", "displacement", "body", "strain", "ratio", "angle"});
   StepSpec step;
   if (const Value* v = find(t, "name")) {
     step.name = to_name(*v, join(path, "name"));
@@ -1204,18 +1205,56 @@ StepSpec Reader::read_step(const Value& t, const std::string& path, std::size_t 
   if (const Value* v = find(t, "kind")) {
     const std::string key = join(path, "kind");
     const std::string kind = to_string(*v, key);
-    if (kind == "standard") {
+    if (kind == "standard" || kind == "load") {
       step.kind = StepSpec::Kind::Standard;
     } else if (kind == "weave") {
       step.kind = StepSpec::Kind::Weave;
     } else if (kind == "relax") {
       step.kind = StepSpec::Kind::Relax;
+    } else if (kind == "biaxial") {
+      step.kind = StepSpec::Kind::Biaxial;
+    } else if (kind == "shear") {
+      step.kind = StepSpec::Kind::Shear;
     } else {
-      const Keys words = {"standard", "weave", "relax"};
+      const Keys words = {"standard", "load", "weave", "relax", "biaxial", "shear"};
       fail(key,
-           fmt::format("expected \"standard\", \"weave\" or \"relax\", got \"{}\"{}", kind, did_you_mean(kind, words)),
+           fmt::format("expected \"load\" (or \"standard\"), \"weave\", \"relax\", \"biaxial\" or \"shear\", got \"{}\"{}",
+                       kind, did_you_mean(kind, words)),
            v);
     }
+  }
+  // The test parameters: each only with its kind, and required there.
+  const bool biaxial = step.kind == StepSpec::Kind::Biaxial, shear = step.kind == StepSpec::Kind::Shear;
+  for (const char* name : {"strain", "ratio", "angle"}) {
+    const Value* v = find(t, name);
+    const bool belongs = std::string(name) == "angle" ? shear : biaxial;
+    if (v && !belongs)
+      fail(join(path, name),
+           fmt::format("`{}` belongs to {} steps; this step's kind is not", name,
+                       std::string(name) == "angle" ? "kind = \"shear\"" : "kind = \"biaxial\""),
+           v);
+  }
+  if (biaxial) {
+    const Value* v = find(t, "strain");
+    if (!v) fail(join(path, "strain"), "a biaxial step needs `strain` (the warp axial strain at its end, e.g. 0.02)", &t);
+    step.strain = to_number(*v, join(path, "strain"));
+    if (!(step.strain > -0.5 && step.strain < 0.5 && step.strain != 0.0))
+      fail(join(path, "strain"), fmt::format("expected a strain in (-0.5, 0.5), not 0, got {}", step.strain), v);
+    if (const Value* r = find(t, "ratio")) {
+      step.ratio = to_number(*r, join(path, "ratio"));
+      if (!(step.ratio >= 0.0 && step.ratio <= 10.0))
+        fail(join(path, "ratio"),
+             fmt::format("expected a ratio in [0, 10] (weft elongation / warp elongation; 0: weft edges free), got {}",
+                         step.ratio),
+             r);
+    }
+  }
+  if (shear) {
+    const Value* v = find(t, "angle");
+    if (!v) fail(join(path, "angle"), "a shear step needs `angle` (the shear angle at its end, in degrees, e.g. 25)", &t);
+    step.angle = to_number(*v, join(path, "angle"));
+    if (!(std::abs(step.angle) > 0.0 && std::abs(step.angle) < 80.0))
+      fail(join(path, "angle"), fmt::format("expected an angle in degrees in (-80, 80), not 0, got {}", step.angle), v);
   }
   if (const Value* v = find(t, "increments")) step.increments = to_int(*v, join(path, "increments"), 1);
   if (const Value* v = find(t, "max_increments")) {
@@ -1530,7 +1569,7 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   check_keys(t, path,
              {"residual_tolerance", "displacement_tolerance", "max_iterations", "max_cuts",
               "line_search", "linear_solver", "ordering", "binding_tolerance", "max_binding_updates",
-              "binding_stiffness", "max_step", "weave_drag", "relax_drag", "relax_tolerance", "krylov_iterations",
+              "binding_stiffness", "max_step", "weave_drag", "relax_drag", "relax_tolerance", "test_tolerance", "krylov_iterations",
               "krylov_tolerance"});
   SolverSpec s;
   if (const Value* v = find(t, "residual_tolerance")) {
@@ -1586,6 +1625,12 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
       if (!(x >= 0)) fail(key, fmt::format("expected a number >= 0 (relative to the contact penalty), got {}", x), v);
       (std::string(name) == "weave_drag" ? s.weave_drag : s.relax_drag) = x;
     }
+  }
+  if (const Value* v = find(t, "test_tolerance")) {
+    const std::string key = join(path, "test_tolerance");
+    s.test_tolerance = to_number(*v, key);
+    if (!(s.test_tolerance > 0 && s.test_tolerance < 1))
+      fail(key, fmt::format("expected a number in (0, 1) (relative to the reference force), got {}", s.test_tolerance), v);
   }
   if (const Value* v = find(t, "relax_tolerance")) {
     const std::string key = join(path, "relax_tolerance");
@@ -1827,6 +1872,17 @@ Case Reader::read(const Value& root) const {
           fail(join(path, "name"),
                fmt::format("duplicate step name \"{}\" (already used by step[{}])", s.name, j),
                find(tables[i], "name") ? find(tables[i], "name") : &tables[i]);
+        }
+      }
+      // Biaxial and shear steps drive the four edge bodies a fabric generates.
+      if ((s.kind == StepSpec::Kind::Biaxial || s.kind == StepSpec::Kind::Shear) && !c.fabric) {
+        for (const char* edge : {"edge.x-", "edge.x+", "edge.y-", "edge.y+"}) {
+          if (std::none_of(c.bodies.begin(), c.bodies.end(), [&](const BodySpec& b) { return b.name == edge; }))
+            fail(join(path, "kind"),
+                 fmt::format("a {} step drives the edge bodies of a fabric (edge.x-, edge.x+, edge.y-, edge.y+); "
+                             "there is no body \"{}\": give {}",
+                             s.kind == StepSpec::Kind::Biaxial ? "biaxial" : "shear", edge, fabric_word),
+                 find(tables[i], "kind"));
         }
       }
       // A weave step orients the contacts between crossing tows by the weave pattern.

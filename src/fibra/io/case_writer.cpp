@@ -243,6 +243,10 @@ const char* kind_name(StepSpec::Kind kind) {
       return "weave";
     case StepSpec::Kind::Relax:
       return "relax";
+    case StepSpec::Kind::Biaxial:
+      return "biaxial";
+    case StepSpec::Kind::Shear:
+      return "shear";
   }
   return "standard";
 }
@@ -251,6 +255,8 @@ void write_step(std::string& out, const StepSpec& s) {
   out += "\n[[step]]\n";
   out += fmt::format("name = {}\n", quoted(s.name));
   out += fmt::format("kind = {}\n", quoted(kind_name(s.kind)));
+  if (s.kind == StepSpec::Kind::Biaxial) out += fmt::format("strain = {}\nratio = {}\n", number(s.strain), number(s.ratio));
+  if (s.kind == StepSpec::Kind::Shear) out += fmt::format("angle = {}\n", number(s.angle));
   out += fmt::format("increments = {}\n", s.increments);
   out += fmt::format("max_increments = {}\n", s.max_increments);
   for (const LoadSpec& l : s.loads) {
@@ -290,6 +296,7 @@ void write_solver(std::string& out, const SolverSpec& s) {
   out += fmt::format("weave_drag = {}\n", number(s.weave_drag));
   out += fmt::format("relax_drag = {}\n", number(s.relax_drag));
   out += fmt::format("relax_tolerance = {}\n", number(s.relax_tolerance));
+  out += fmt::format("test_tolerance = {}\n", number(s.test_tolerance));
   out += fmt::format("krylov_iterations = {}\n", s.krylov_iterations);
   out += fmt::format("krylov_tolerance = {}\n", number(s.krylov_tolerance));
 }

@@ -167,11 +167,16 @@ struct TowSpec {
 /// A load step: loads and displacements ramp linearly over the step from where the previous
 /// step ended; an entry not listed again keeps its last value.
 struct StepSpec {
-  /// standard: usual contact; weave: contacts between crossing tows pushed to the side the
-  /// weave pattern says (METHOD §6); relax: usual normals, after weaving.
-  enum class Kind { Standard, Weave, Relax };
+  /// standard (or "load" in a file): the loads and conditions listed; weave: contacts between
+  /// crossing tows pushed to the side the weave pattern says (METHOD §6); relax: usual
+  /// normals, after weaving; biaxial, shear: mechanical tests of a fabric through its edge
+  /// bodies (METHOD §7; conditions set at the step's start from the edges' positions then).
+  enum class Kind { Standard, Weave, Relax, Biaxial, Shear };
   std::string name;
   Kind kind = Kind::Standard;
+  double strain = 0;  ///< biaxial: warp axial strain at the step's end, from its start
+  double ratio = 1;   ///< biaxial: weft elongation / warp elongation (0: weft edges free)
+  double angle = 0;   ///< shear: shear angle at the step's end, from its start [degrees]
   int increments = 1;      ///< initial number of increments (the solver adapts)
   int max_increments = 0;  ///< 0 = 100 * increments
   std::vector<LoadSpec> loads;
@@ -191,6 +196,7 @@ struct SolverSpec {
   double weave_drag = 1.0;                ///< drag per node in weave steps, relative to the contact penalty
   double relax_drag = 1e-2;               ///< initial proximal drag per node in relax steps, relative to it
   double relax_tolerance = 1e-6;          ///< relax steps end when the drag's force is below this (relative)
+  double test_tolerance = 1e-4;           ///< biaxial/shear: a load level is an equilibrium when the drag's force is below this (relative)
   int krylov_iterations = 20;             ///< CG iterations preconditioned by the last factorization; 0 = factorize every iteration
   double krylov_tolerance = 1e-8;         ///< CG stops at this residual relative to the Newton residual
   double max_step = -1;                   ///< largest motion per Newton iteration [m]; < 0 = automatic (half the smallest radius with contact, none without), 0 = none

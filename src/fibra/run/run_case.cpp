@@ -5,6 +5,8 @@
 
 #include <fmt/format.h>
 
+#include <array>
+#include <numbers>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -49,6 +51,10 @@ const char* step_kind_name(StepSpec::Kind kind) {
       return "weave";
     case StepSpec::Kind::Relax:
       return "relax";
+    case StepSpec::Kind::Biaxial:
+      return "biaxial";
+    case StepSpec::Kind::Shear:
+      return "shear";
     case StepSpec::Kind::Standard:
       break;
   }
@@ -100,7 +106,65 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   double time_fabric = 0.0;
   auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   double time_output = 0.0;
+  // Loading curves of the biaxial and shear steps (curves_<step>.csv): the edge bodies'
+  // forces on the fabric and their relative motion since the step's start.
+  int edge[4] = {-1, -1, -1, -1};
+  if (bodies)
+    for (int e = 0; e < 4; ++e) edge[e] = model.body_index(std::array{"edge.x-", "edge.x+", "edge.y-", "edge.y+"}[e]);
+  std::vector<Vec3> last_centres, start_centres;
+  std::vector<Vec3> last_forces;
+  if (bodies)
+    for (Index b = 0; b < bodies->num_bodies(); ++b) {
+      last_centres.push_back(model.bodies[b].center);
+      last_forces.push_back(Vec3::Zero());
+    }
+  int curves_step = -1;
+  std::ofstream curves;
+  nlohmann::json curves_files = nlohmann::json::array();
+  auto curve_row = [&](const std::string& step, int increment, double load, const std::vector<Vec3>& centre,
+                       const std::vector<Vec3>& force, double elements, double penetration) {
+    const Vec3 &x0 = start_centres[edge[0]], &x1 = start_centres[edge[1]], &y0 = start_centres[edge[2]],
+               &y1 = start_centres[edge[3]];
+    const double lx = x1.x() - x0.x(), ly = y1.y() - y0.y();
+    const double warp_strain = (centre[edge[1]].x() - centre[edge[0]].x()) / lx - 1.0;
+    const double weft_strain = (centre[edge[3]].y() - centre[edge[2]].y()) / ly - 1.0;
+    const double offset = (centre[edge[3]].x() - centre[edge[2]].x()) - (y1.x() - y0.x());
+    const double angle = std::atan2(offset, ly) * 180.0 / std::numbers::pi;
+    curves << fmt::format("{},{},{},{},{},{},{},{},{},{},{}\n", step, increment, load, warp_strain, weft_strain,
+                          force[edge[1]].x(), force[edge[3]].y(), angle, force[edge[3]].x(), elements, penetration);
+    curves.flush();
+  };
   auto observer = [&](const IncrementInfo& info, const VecX& q) {
+    const StepSpec::Kind step_kind = c.steps[info.step_index].kind;
+    if ((step_kind == StepSpec::Kind::Biaxial || step_kind == StepSpec::Kind::Shear) && info.step_index != curves_step &&
+        edge[0] >= 0 && edge[1] >= 0 && edge[2] >= 0 && edge[3] >= 0) {
+      // A new loading step: its curves start from the state at its start.
+      curves_step = info.step_index;
+      start_centres = last_centres;
+      const std::string name = "curves_" + file_stem(info.step) + ".csv";
+      if (curves.is_open()) curves.close();
+      curves.open(writer.dir() + "/" + name, std::ios::trunc);
+      if (!curves) throw RunError(fmt::format("cannot open for writing '{}/{}'", writer.dir(), name));
+      curves << "step,increment,load_factor,warp_strain,weft_strain,warp_force,weft_force,shear_angle_deg,"
+                "shear_force,contact_elements,max_penetration_ratio\n";
+      curve_row(info.step, 0, 0.0, last_centres, last_forces, std::nan(""), std::nan(""));
+      const StepSpec& st = c.steps[info.step_index];
+      curves_files.push_back({{"step", info.step},
+                              {"kind", step_kind_name(step_kind)},
+                              {"file", name},
+                              {"strain", st.strain},
+                              {"ratio", st.ratio},
+                              {"angle", st.angle}});
+    }
+    if (bodies) {
+      for (Index b = 0; b < bodies->num_bodies(); ++b) {
+        last_centres[b] = info.bodies[b].center;
+        last_forces[b] = info.bodies[b].force;
+      }
+      if (info.step_index == curves_step && info.settled)
+        curve_row(info.step, info.increment, info.load_factor, last_centres, last_forces,
+                  double(info.contact.elements), info.contact.max_penetration_ratio);
+    }
     std::optional<FabricReport> rep;
     if (fabric) {
       const auto tf = std::chrono::steady_clock::now();
@@ -227,6 +291,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     }
     j["fabric_steps"] = fabric_steps;
   }
+  if (!curves_files.empty()) j["curves"] = curves_files;
   j["solver"] = {{"linear_solver", c.solver.linear_solver},
                  {"ordering", c.solver.ordering},
                  {"threads", omp_get_max_threads()},

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <numbers>
 #include <fmt/format.h>
 #include <map>
 
@@ -206,7 +207,9 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   // Weaving is a pseudo-time process: a drag towards the increment's start (stiffness per
   // node a multiple of the contact penalty) keeps each increment well posed while loose
   // fibers are pushed through their crossing partners; the relax step removes it.
-  const bool relax = m_case.steps[step].kind == StepSpec::Kind::Relax;
+  // Relax, biaxial and shear steps: proximal increments (below).
+  const StepSpec::Kind kind = m_case.steps[step].kind;
+  const bool relax = kind == StepSpec::Kind::Relax || kind == StepSpec::Kind::Biaxial || kind == StepSpec::Kind::Shear;
   const double k0 = m_contact->initial_stiffness();
   // Relax: each increment is a proximal-point step, a drag of adaptive stiffness (run())
   // towards the increment's start.
@@ -528,6 +531,63 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
   }
 }
 
+void StaticSolver::test_conditions(int step, std::map<Index, std::pair<double, double>>& disp) const {
+  // METHOD §7. The fabric's edge bodies are driven from where they are at the step's start:
+  // strains and angles are measured from there, not from the flat starting assembly.
+  const StepSpec& st = m_case.steps[step];
+  const char* names[4] = {"edge.x-", "edge.x+", "edge.y-", "edge.y+"};
+  int edge[4];
+  for (int e = 0; e < 4; ++e) {
+    edge[e] = m_model.body_index(names[e]);
+    if (edge[e] < 0)
+      throw InputError(m_case.file, fmt::format("step[{}].kind", step),
+                       fmt::format("a {} step drives the fabric's edge bodies; there is no body \"{}\"",
+                                   st.kind == StepSpec::Kind::Biaxial ? "biaxial" : "shear", names[e]));
+  }
+  auto dof = [&](int e, int k) { return m_model.bodies[edge[e]].first_dof + k; };
+  auto u = [&](int e, int k) { return m_q[dof(e, k)] - m_model.reference[dof(e, k)]; };
+  auto centre = [&](int e) { return Vec3(m_q.segment<3>(dof(e, 0))); };
+  // Every component held where it is; then the driven and the free ones.
+  auto hold = [&](int e, int k) {
+    if (k < 3)
+      disp[dof(e, k)] = {u(e, k), u(e, k)};
+    else
+      disp[dof(e, k)] = {m_bodies->rotation(edge[e], m_q)[k - 3], m_bodies->rotation(edge[e], m_q)[k - 3]};
+  };
+  for (int e = 0; e < 4; ++e)
+    for (int k = 0; k < 6; ++k) hold(e, k);
+  const double lx = centre(1).x() - centre(0).x(), ly = centre(3).y() - centre(2).y();
+  if (st.kind == StepSpec::Kind::Biaxial) {
+    // Warp edges pulled apart by strain x their distance; the weft ones by ratio x that
+    // strain x theirs, or free along the weft (ratio 0: uniaxial, the weft keeps its load).
+    disp[dof(1, 0)].second = u(1, 0) + st.strain * lx;
+    if (st.ratio > 0.0)
+      disp[dof(3, 1)].second = u(3, 1) + st.ratio * st.strain * ly;
+    else
+      disp.erase(dof(3, 1));
+    return;
+  }
+  // Shear: the y- and y+ edges (bottom and top) moved in opposite senses along x by
+  // (ly / 2) tan(angle); the lateral x- and x+ edges free to slide along them (y) and to turn
+  // about the fabric's normal, and so are the tow ends bound to them; x- stays where it is
+  // along x and x+ keeps whatever holds it there (by default free under the warp tension).
+  const double d = 0.5 * ly * std::tan(st.angle * std::numbers::pi / 180.0);
+  disp[dof(2, 0)].second = u(2, 0) - d;
+  disp[dof(3, 0)].second = u(3, 0) + d;
+  if (m_program->force_end[dof(1, 0)] != 0.0) disp.erase(dof(1, 0));
+  for (int e : {0, 1}) {
+    disp.erase(dof(e, 1));
+    disp.erase(dof(e, 5));
+    for (const BindingSpec& b : m_case.bindings) {
+      if (b.body != names[e]) continue;
+      for (const std::string& child : b.bodies) {
+        const int cb = m_model.body_index(child);
+        if (cb >= 0) disp.erase(m_model.bodies[cb].first_dof + 5);
+      }
+    }
+  }
+}
+
 RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const VecX&)>& observer) {
   const auto t_start = std::chrono::steady_clock::now();
   RunResult result;
@@ -593,6 +653,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       if (bs.force) p.force_end.segment<3>(d0) = *bs.force;
       if (bs.moment) p.force_end.segment<3>(d0 + 3) = *bs.moment;
     }
+    if (st.kind == StepSpec::Kind::Biaxial || st.kind == StepSpec::Kind::Shear) test_conditions(step, disp);
     p.disp = disp;
 
     m_weave_depth = -1.0;  // measured at the step's first detection
@@ -607,7 +668,12 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     // (lambda = 1), the drag's force at the end of an increment is below relax_tolerance times
     // the reference force and the increment's normals, cones and penalties did not move: the
     // state is then an equilibrium without drag.
-    const bool relax = st.kind == StepSpec::Kind::Relax && m_contact && opt.relax_drag > 0.0;
+    // Biaxial and shear steps (tests of a woven fabric) take the same proximal increments, and
+    // each load level is repeated at the same load factor until its drag force is negligible
+    // and its normals settled: every point of their curves is an equilibrium without drag.
+    const bool test = st.kind == StepSpec::Kind::Biaxial || st.kind == StepSpec::Kind::Shear;
+    const bool relax = (st.kind == StepSpec::Kind::Relax || test) && m_contact && opt.relax_drag > 0.0;
+    bool level_settled = true;
     const double k0 = m_contact ? m_contact->initial_stiffness() : 0.0;
     const double relax_max = std::max(opt.weave_drag, opt.relax_drag) * k0, relax_min = 1e-9 * k0;
     m_relax_drag = relax ? opt.relax_drag * k0 : 0.0;
@@ -615,6 +681,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     bool relaxed = !relax;
     while (lambda < 1.0 - 1e-12 || !relaxed) {
       dl = std::min(dl, 1.0 - lambda);
+      const double step_dl = relax && test && !level_settled ? 0.0 : dl;
       const VecX saved = m_q;
       m_q_start = m_q;
       const std::vector<ContactElement> saved_contacts = m_contact ? m_problem->contacts() : std::vector<ContactElement>{};
@@ -622,7 +689,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       std::vector<double> history;
       int iterations = 0;
       double residual = 0.0;
-      const bool ok = solve_increment(step, lambda + dl, history, iterations, residual);
+      const bool ok = solve_increment(step, lambda + step_dl, history, iterations, residual);
       ++attempts;
       if (interrupt_flag().load()) {
         m_q = saved;
@@ -630,7 +697,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         result.message = "interrupted by the user";
         result.step = st.name;
         result.load_factor = lambda;
-        result.attempted_load_factor = lambda + dl;
+        result.attempted_load_factor = lambda + step_dl;
         return result;
       }
       if (!ok) {
@@ -647,7 +714,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
           result.status = RunResult::Status::Failed;
           result.step = st.name;
           result.load_factor = lambda;
-          result.attempted_load_factor = lambda + dl;
+          result.attempted_load_factor = lambda + step_dl;
           result.residual_history = history;
           result.message = fmt::format(
               "step \"{}\": the increment from load factor {:.6g} to {:.6g} did not converge after {} cuts "
@@ -668,16 +735,22 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
           sum += u * u;
         }
         m_relax_residual = m_relax_drag * std::sqrt(sum) / std::max(m_reference_force, 1e-300);
-        const bool loaded = lambda + dl >= 1.0 - 1e-12;
-        relaxed = loaded && m_relax_residual <= opt.relax_tolerance && m_normals_settled;
-        m_relax_settling = loaded && m_relax_residual <= opt.relax_tolerance;
+        const bool loaded = lambda + step_dl >= 1.0 - 1e-12;
+        if (test) {
+          level_settled = m_relax_residual <= opt.test_tolerance && m_normals_settled;
+          relaxed = loaded && level_settled;
+          m_relax_settling = m_relax_residual <= opt.test_tolerance && !level_settled;
+        } else {
+          relaxed = loaded && m_relax_residual <= opt.relax_tolerance && m_normals_settled;
+          m_relax_settling = loaded && m_relax_residual <= opt.relax_tolerance;
+        }
         // Easy increments: the drag falls, faster the easier they were.
         if (iterations <= 12)
           m_relax_drag = std::max(0.25 * m_relax_drag, relax_min);
         else if (iterations <= 30)
           m_relax_drag = std::max(0.5 * m_relax_drag, relax_min);
       }
-      lambda += dl;
+      lambda += step_dl;
       if (1.0 - lambda < 1e-12) lambda = 1.0;
       ++done;
       ++total;
@@ -693,6 +766,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       info.wall_time = seconds_since(t_start);
       info.increment_time = seconds_since(t_increment);
       info.step_end = lambda >= 1.0 && relaxed;
+      info.settled = !(relax && test) || level_settled;
       info.relax_residual = relax ? m_relax_residual : 0.0;
       info.reactions = reactions(m_gradient);
       if (m_bodies) {

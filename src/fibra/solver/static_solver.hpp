@@ -3,6 +3,7 @@
 /// displacements, adaptive load increments, Newton–Raphson with a line search.
 #include <atomic>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -28,6 +29,9 @@ struct IncrementInfo {
   double wall_time = 0;        ///< since the start of the run [s]
   double increment_time = 0;   ///< spent on this increment, failed attempts included [s]
   bool step_end = false;       ///< last increment of its step
+  /// An equilibrium without drag: false for the increments of a biaxial or shear step that
+  /// repeat a load level until its drag force is negligible (their curves skip them).
+  bool settled = true;
   std::vector<double> reactions;  ///< per reaction column (see reaction_columns())
   ContactStats contact;           ///< contact statistics (zero without contact)
   std::vector<ContactResponse> contact_responses;  ///< per contact element, before the history commit
@@ -91,6 +95,9 @@ class StaticSolver {
   void set_progress(std::function<void(const std::string&)> progress) { m_progress = std::move(progress); }
 
  private:
+  /// Biaxial and shear steps: the edge bodies' conditions from their positions at the step's
+  /// start (prescribed start and end values of the body dofs, into `disp`).
+  void test_conditions(int step, std::map<Index, std::pair<double, double>>& disp) const;
   struct Program;  // resolved loads and displacements per step
   bool solve_increment(int step, double lambda, std::vector<double>& history, int& iterations, double& residual);
   bool newton(std::vector<double>& history, int& iterations, double& residual);
