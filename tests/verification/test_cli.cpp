@@ -489,6 +489,99 @@ node = "first"
   force = [0, 0, -2]
 )";
 
+// A biaxial step after the weaving writes curves_<step>.csv: a row at the step's start and one
+// per load level, whose numbers are the edge bodies' in history.csv at the same increments.
+TEST_F(Cli, BiaxialStepWritesItsCurves) {
+  // The friction sample of the weaving tests (kSmallFabric's elements of 1 mm are too coarse
+  // for a test: its first level did not settle).
+  write("fabric.toml", R"(
+[[material]]
+name = "glass"
+young = 72e9
+poisson = 0.22
+[fabric]
+pattern = "plain"
+warp = { tows = 2, spacing = 1.0e-3 }
+weft = { tows = 2, spacing = 1.0e-3 }
+margin = 0.5e-3
+tension = 0.5
+  [fabric.tow]
+  fibers = 3
+  width = 0.7e-3
+  thickness = 0.25e-3
+  [fabric.fiber]
+  radius = 5e-5
+  material = "glass"
+  element_length = 1.25e-4
+[contact]
+friction = 0.2
+elastic_slip = 5e-7
+[[step]]
+name = "weave"
+kind = "weave"
+increments = 10
+[[step]]
+name = "relax"
+kind = "relax"
+increments = 10
+[[step]]
+name = "pull"
+kind = "biaxial"
+strain = 0.004
+increments = 2
+)");
+  const Result r = fibra("run fabric.toml --out out");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const fs::path out = m_dir / "out";
+  ASSERT_TRUE(fs::is_regular_file(out / "curves_pull.csv")) << r.out;
+  std::ifstream in(out / "curves_pull.csv");
+  std::string header, line;
+  ASSERT_TRUE(std::getline(in, header));
+  EXPECT_EQ(header,
+            "step,increment,load_factor,warp_strain,weft_strain,warp_force,weft_force,shear_angle_deg,shear_force,"
+            "contact_elements,max_penetration_ratio");
+  std::vector<std::vector<std::string>> rows;
+  while (std::getline(in, line))
+    if (!line.empty()) rows.push_back(split_csv(line));
+  ASSERT_EQ(rows.size(), 3u);
+  const double loads[3] = {0.0, 0.5, 1.0};
+  for (int k = 0; k < 3; ++k) {
+    ASSERT_EQ(rows[k].size(), 11u);
+    EXPECT_EQ(rows[k][0], "pull");
+    EXPECT_NEAR(std::stod(rows[k][2]), loads[k], 1e-12);
+    EXPECT_NEAR(std::stod(rows[k][3]), 0.004 * loads[k], 1e-12);  // warp strain
+    EXPECT_NEAR(std::stod(rows[k][4]), 0.004 * loads[k], 1e-12);  // ratio 1: the weft alike
+  }
+  EXPECT_GT(std::stod(rows[2][5]), std::stod(rows[0][5]));  // the warp force grows
+
+  // history.csv holds the same forces at the same increments.
+  std::ifstream hin(out / "history.csv");
+  ASSERT_TRUE(std::getline(hin, header));
+  const std::vector<std::string> columns = split_csv(header);
+  auto column = [&](const std::string& name) {
+    return static_cast<size_t>(std::find(columns.begin(), columns.end(), name) - columns.begin());
+  };
+  const size_t fx = column("body:edge.x+:fx"), fy = column("body:edge.y+:fy"), inc = column("increment");
+  ASSERT_LT(fx, columns.size());
+  ASSERT_LT(fy, columns.size());
+  int matched = 0;
+  while (std::getline(hin, line)) {
+    const std::vector<std::string> h = split_csv(line);
+    if (h.empty() || h[0] != "pull") continue;
+    for (int k = 1; k < 3; ++k)
+      if (h[inc] == rows[k][1]) {
+        EXPECT_DOUBLE_EQ(std::stod(h[fx]), std::stod(rows[k][5]));
+        EXPECT_DOUBLE_EQ(std::stod(h[fy]), std::stod(rows[k][6]));
+        ++matched;
+      }
+  }
+  EXPECT_EQ(matched, 2);
+  const nlohmann::json s = nlohmann::json::parse(slurp(out / "summary.json"));
+  ASSERT_TRUE(s.contains("curves")) << s.dump();
+  EXPECT_EQ(s["curves"][0]["file"], "curves_pull.csv");
+  EXPECT_EQ(s["curves"][0]["kind"], "biaxial");
+}
+
 TEST_F(Cli, SliceOfARunWritesSvgAndPng) {
   write("beams.toml", kTwoBeams);
   const Result run = fibra("run beams.toml --out out");
