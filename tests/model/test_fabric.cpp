@@ -9,6 +9,7 @@
 #include "fibra/core/error.hpp"
 #include "fibra/io/case_reader.hpp"
 #include "fibra/model/fabric.hpp"
+#include "support/fabric_cases.hpp"
 
 namespace fibra {
 namespace {
@@ -174,30 +175,14 @@ name = "s"
 // A tow end (or edge) the user lists in any step keeps the user's conditions: the expansion
 // adds its defaults only for the bodies no step mentions.
 TEST(FabricExpansion, UserConditionsOnATowEndReplaceTheDefault) {
-  const Case c = parse_case_toml(R"(
-[[material]]
-name = "glass"
-young = 72e9
-poisson = 0.22
-[fabric]
-pattern = "plain"
-warp = { tows = 2, spacing = 1.0e-3 }
-weft = { tows = 2, spacing = 1.0e-3 }
-  [fabric.tow]
-  fibers = 3
-  width = 0.7e-3
-  thickness = 0.25e-3
-  [fabric.fiber]
-  radius = 5.0e-5
-  material = "glass"
-  element_length = 2.0e-4
-[[step]]
+  const Case c = parse_case_toml(test::glass_fabric("plain", 2, 3, 5.0e-5, 2.0e-4, "", R"([[step]]
 name = "weave"
 kind = "weave"
   [[step.body]]
   name = "weft1.end"
   rotation = ["free", "free", 0]
-)", "fabric.toml");
+)"),
+                                 "fabric.toml");
   int entries = 0;
   for (const BodyStepSpec& b : c.steps.front().bodies) {
     if (b.name != "weft1.end") continue;

@@ -18,6 +18,7 @@
 #include "fibra/io/case_reader.hpp"
 #include "fibra/io/case_writer.hpp"
 #include "io/case_compare.hpp"
+#include "support/fabric_cases.hpp"
 
 namespace fibra {
 namespace {
@@ -494,42 +495,12 @@ node = "first"
 TEST_F(Cli, BiaxialStepWritesItsCurves) {
   // The friction sample of the weaving tests (kSmallFabric's elements of 1 mm are too coarse
   // for a test: its first level did not settle).
-  write("fabric.toml", R"(
-[[material]]
-name = "glass"
-young = 72e9
-poisson = 0.22
-[fabric]
-pattern = "plain"
-warp = { tows = 2, spacing = 1.0e-3 }
-weft = { tows = 2, spacing = 1.0e-3 }
-margin = 0.5e-3
-tension = 0.5
-  [fabric.tow]
-  fibers = 3
-  width = 0.7e-3
-  thickness = 0.25e-3
-  [fabric.fiber]
-  radius = 5e-5
-  material = "glass"
-  element_length = 1.25e-4
-[contact]
-friction = 0.2
-elastic_slip = 5e-7
-[[step]]
-name = "weave"
-kind = "weave"
-increments = 10
-[[step]]
-name = "relax"
-kind = "relax"
-increments = 10
-[[step]]
+  write("fabric.toml", test::plain_friction_sample(R"([[step]]
 name = "pull"
 kind = "biaxial"
 strain = 0.004
 increments = 2
-)");
+)"));
   const Result r = fibra("run fabric.toml --out out");
   ASSERT_EQ(r.code, 0) << r.err;
   const fs::path out = m_dir / "out";

@@ -16,36 +16,13 @@
 
 #include "fibra/model/fabric.hpp"
 #include "fibra/model/fabric_report.hpp"
+#include "support/fabric_cases.hpp"
 #include "verification/verification_support.hpp"
 
 namespace fibra {
 namespace {
 
-// A fabric of glass fibers, tows 0.7 x 0.25 mm at 1 mm spacing, 0.5 mm free beyond the outer
-// crossings; `fabric_extra` goes into [fabric], `rest` after it ([contact] and the steps).
-std::string glass_fabric(const std::string& pattern, int tows, int fibers, double radius, double element_length,
-                         const std::string& fabric_extra, const std::string& rest) {
-  return fmt::format(R"(
-[[material]]
-name = "glass"
-young = 72e9
-poisson = 0.22
-[fabric]
-pattern = "{}"
-warp = {{ tows = {}, spacing = 1.0e-3 }}
-weft = {{ tows = {}, spacing = 1.0e-3 }}
-margin = 0.5e-3
-{}  [fabric.tow]
-  fibers = {}
-  width = 0.7e-3
-  thickness = 0.25e-3
-  [fabric.fiber]
-  radius = {}
-  material = "glass"
-  element_length = {}
-{})",
-                     pattern, tows, tows, fabric_extra, fibers, radius, element_length, rest);
-}
+using test::glass_fabric;
 
 const char* kWeaveStep = R"([[step]]
 name = "weave"
@@ -157,9 +134,7 @@ TEST(Weaving, PlainAndTwillFromTheSameTowsDiffer) {
 //  - the relaxed fabric is still crimped in both directions, less than at the end of the
 //    weave step (the tension straightens the tows until the crossings hold them), warp and
 //    weft alike within 15 %.
-const std::string kPlainFriction = glass_fabric("plain", 2, 3, 5.0e-5, 1.25e-4, "tension = 0.5\n",
-                                                std::string("[contact]\nfriction = 0.2\nelastic_slip = 5e-7\n") + kWeaveStep +
-                                                    "[[step]]\nname = \"relax\"\nkind = \"relax\"\nincrements = 10\n");
+const std::string kPlainFriction = test::plain_friction_sample();
 
 TEST(Weaving, PlainWeaveWithFrictionRelaxesToEquilibrium) {
   const test::Solved s = test::solve_toml(kPlainFriction, "plain_friction.toml");
