@@ -178,7 +178,15 @@ TEST_F(Cli, RunThatCannotConvergeFailsAndKeepsItsOutputs) {
   EXPECT_EQ(s["stopped_at"].value("step", ""), "crush");
   EXPECT_EQ(s["stopped_at"].value("load_factor", -1.0), 0.0);
   EXPECT_EQ(s["stopped_at"].value("attempted_load_factor", -1.0), 1.0);
-  EXPECT_FALSE(s.value("message", "").empty());
+  EXPECT_NE(s.value("message", "").find("did not converge after 0 cuts"), std::string::npos) << s.dump(2);
+
+  // With cuts allowed but one increment at most, the message says the increment limit stopped it.
+  write("limited.toml", replace(replace(kGood, "force = [0, 0, -1]", "force = [0, 0, -1e7]"), "[[step]]",
+                                "[solver]\nmax_iterations = 2\n\n[[step]]\nname = \"crush\"\nmax_increments = 1"));
+  const Result l = fibra("run limited.toml --out out2");
+  EXPECT_NE(l.code, 0);
+  EXPECT_NE(l.err.find("stopped at load factor 0 after 1 increments tried (max_increments 1)"), std::string::npos)
+      << l.err;
 }
 
 TEST_F(Cli, RunOfAValidCaseSucceeds) {

@@ -716,11 +716,18 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
           result.load_factor = lambda;
           result.attempted_load_factor = lambda + step_dl;
           result.residual_history = history;
-          result.message = fmt::format(
-              "step \"{}\": the increment from load factor {:.6g} to {:.6g} did not converge after {} cuts "
-              "({} Newton iterations, last relative residual {:.3e}, tolerance {:.1e})",
-              st.name, lambda, lambda + dl, cuts_here, iterations, history.empty() ? 0.0 : history.back(),
-              opt.residual_tolerance);
+          if (attempts >= max_increments)
+            result.message = fmt::format(
+                "step \"{}\": stopped at load factor {:.6g} after {} increments tried (max_increments {}); the last "
+                "one, to {:.6g}, did not converge ({} Newton iterations, last relative residual {:.3e}, tolerance {:.1e})",
+                st.name, lambda, attempts, max_increments, lambda + step_dl, iterations,
+                history.empty() ? 0.0 : history.back(), opt.residual_tolerance);
+          else
+            result.message = fmt::format(
+                "step \"{}\": the increment from load factor {:.6g} to {:.6g} did not converge after {} cuts "
+                "({} Newton iterations, last relative residual {:.3e}, tolerance {:.1e})",
+                st.name, lambda, lambda + dl, cuts_here, iterations, history.empty() ? 0.0 : history.back(),
+                opt.residual_tolerance);
           return result;
         }
         if (!stiffer) dl *= 0.5;
