@@ -6,13 +6,13 @@
 #include <fmt/format.h>
 
 #include <array>
-#include <numbers>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <numbers>
 #include <nlohmann/json.hpp>
 
 #include "fibra/core/error.hpp"
