@@ -1875,13 +1875,13 @@ Case Reader::read(const Value& root) const {
         }
       }
       // Biaxial and shear steps drive the four edge bodies a fabric generates.
-      if ((s.kind == StepSpec::Kind::Biaxial || s.kind == StepSpec::Kind::Shear) && !c.fabric) {
-        for (const char* edge : {"edge.x-", "edge.x+", "edge.y-", "edge.y+"}) {
+      if (s.is_test() && !c.fabric) {
+        for (const char* edge : kEdgeBodies) {
           if (std::none_of(c.bodies.begin(), c.bodies.end(), [&](const BodySpec& b) { return b.name == edge; }))
             fail(join(path, "kind"),
                  fmt::format("a {} step drives the edge bodies of a fabric (edge.x-, edge.x+, edge.y-, edge.y+); "
                              "there is no body \"{}\": give {}",
-                             s.kind == StepSpec::Kind::Biaxial ? "biaxial" : "shear", edge, fabric_word),
+                             StepSpec::kind_name(s.kind), edge, fabric_word),
                  find(tables[i], "kind"));
         }
       }

@@ -235,26 +235,10 @@ void write_weave(std::string& out, const std::vector<std::vector<int>>& matrix) 
   out += fmt::format("matrix = {}\n", array(rows, 2));
 }
 
-const char* kind_name(StepSpec::Kind kind) {
-  switch (kind) {
-    case StepSpec::Kind::Standard:
-      return "standard";
-    case StepSpec::Kind::Weave:
-      return "weave";
-    case StepSpec::Kind::Relax:
-      return "relax";
-    case StepSpec::Kind::Biaxial:
-      return "biaxial";
-    case StepSpec::Kind::Shear:
-      return "shear";
-  }
-  return "standard";
-}
-
 void write_step(std::string& out, const StepSpec& s) {
   out += "\n[[step]]\n";
   out += fmt::format("name = {}\n", quoted(s.name));
-  out += fmt::format("kind = {}\n", quoted(kind_name(s.kind)));
+  out += fmt::format("kind = {}\n", quoted(StepSpec::kind_name(s.kind)));
   if (s.kind == StepSpec::Kind::Biaxial) out += fmt::format("strain = {}\nratio = {}\n", number(s.strain), number(s.ratio));
   if (s.kind == StepSpec::Kind::Shear) out += fmt::format("angle = {}\n", number(s.angle));
   out += fmt::format("increments = {}\n", s.increments);

@@ -21,4 +21,20 @@ std::string NodeRef::label() const {
   return "first";
 }
 
+const char* StepSpec::kind_name(Kind k) {
+  switch (k) {
+    case Kind::Standard:
+      break;
+    case Kind::Weave:
+      return "weave";
+    case Kind::Relax:
+      return "relax";
+    case Kind::Biaxial:
+      return "biaxial";
+    case Kind::Shear:
+      return "shear";
+  }
+  return "standard";
+}
+
 }  // namespace fibra

@@ -174,6 +174,12 @@ struct StepSpec {
   enum class Kind { Standard, Weave, Relax, Biaxial, Shear };
   std::string name;
   Kind kind = Kind::Standard;
+  /// The kind as a case file spells it ("standard", "weave", ...).
+  static const char* kind_name(Kind k);
+  /// A mechanical test of a woven sample (biaxial or shear).
+  bool is_test() const { return kind == Kind::Biaxial || kind == Kind::Shear; }
+  /// Increments are proximal steps, with a drag towards their start (relax and the tests).
+  bool is_proximal() const { return kind == Kind::Relax || is_test(); }
   double strain = 0;  ///< biaxial: warp axial strain at the step's end, from its start
   double ratio = 1;   ///< biaxial: weft elongation / warp elongation (0: weft edges free)
   double angle = 0;   ///< shear: shear angle at the step's end, from its start [degrees]

@@ -300,15 +300,14 @@ void expand_fabric(Case& c) {
       c.tows.push_back(std::move(tow));
     }
   }
-  const char* edge_names[4] = {"edge.x-", "edge.x+", "edge.y-", "edge.y+"};
   for (int e = 0; e < 4; ++e) {
     Vec3 centre = Vec3::Zero();
     for (const std::string& m : edge_members[e])
       for (const BodySpec& b : c.bodies)
         if (b.name == m) centre += b.center / static_cast<double>(edge_members[e].size());
-    c.bodies.push_back({edge_names[e], centre, Mat3::Identity()});
+    c.bodies.push_back({kEdgeBodies[e], centre, Mat3::Identity()});
     BindingSpec bind;
-    bind.body = edge_names[e];
+    bind.body = kEdgeBodies[e];
     bind.bodies = edge_members[e];
     bind.line = static_cast<int>(c.bindings.size());
     c.bindings.push_back(std::move(bind));
@@ -337,9 +336,9 @@ void expand_fabric(Case& c) {
     const double ff = tension_f * nf * static_cast<double>(dirs[1].sites.size());
     StepSpec& first = c.steps.front();
     for (int e = 0; e < 4; ++e) {
-      if (listed(edge_names[e])) continue;
+      if (listed(kEdgeBodies[e])) continue;
       BodyStepSpec b;
-      b.name = edge_names[e];
+      b.name = kEdgeBodies[e];
       b.has_displacement = b.has_rotation = true;
       b.displacement = {0.0, 0.0, 0.0};
       b.rotation = {0.0, 0.0, 0.0};

@@ -4,6 +4,7 @@
 /// tows in one plane, fibers packed in elliptical sections, a rigid body on each tow end and
 /// on each fabric edge, averaged bindings fiber ends -> tow-end body -> edge body, the tows
 /// and the weave matrix for the weave steps, and the edges' boundary conditions.
+#include <array>
 #include <string>
 #include <vector>
 
@@ -40,5 +41,9 @@ std::vector<Eigen::Vector2d> pack_ellipse(int count, double r, double width, dou
 /// adds the edges' boundary conditions to the first step; throws InputError (c.file,
 /// "fabric...") on impossible input (more fibers than fit, spacing below the tow width, ...).
 void expand_fabric(Case& c);
+
+/// The four edge bodies a fabric generates, in this order: the warp starts and ends (x- and
+/// x+), the weft starts and ends (y- and y+). Biaxial and shear steps drive them.
+inline constexpr std::array<const char*, 4> kEdgeBodies = {"edge.x-", "edge.x+", "edge.y-", "edge.y+"};
 
 }  // namespace fibra

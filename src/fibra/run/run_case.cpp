@@ -19,6 +19,7 @@
 #include "fibra/io/case_writer.hpp"
 #include "fibra/io/output_writer.hpp"
 #include "fibra/io/slice.hpp"
+#include "fibra/model/fabric.hpp"
 #include "fibra/model/fabric_report.hpp"
 #include "fibra/model/model.hpp"
 
@@ -43,22 +44,6 @@ void write_text_atomic(const std::string& path, const std::string& text) {
     std::remove(tmp.c_str());
     throw RunError(fmt::format("cannot rename '{}' to '{}': {}", tmp, path, std::strerror(err)));
   }
-}
-
-const char* step_kind_name(StepSpec::Kind kind) {
-  switch (kind) {
-    case StepSpec::Kind::Weave:
-      return "weave";
-    case StepSpec::Kind::Relax:
-      return "relax";
-    case StepSpec::Kind::Biaxial:
-      return "biaxial";
-    case StepSpec::Kind::Shear:
-      return "shear";
-    case StepSpec::Kind::Standard:
-      break;
-  }
-  return "standard";
 }
 
 /// A step name as a file name: characters other than letters, digits, '.', '-', '_' become '_'.
@@ -108,62 +93,57 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   double time_output = 0.0;
   // Loading curves of the biaxial and shear steps (curves_<step>.csv): the edge bodies'
   // forces on the fabric and their relative motion since the step's start.
-  int edge[4] = {-1, -1, -1, -1};
-  if (bodies)
-    for (int e = 0; e < 4; ++e) edge[e] = model.body_index(std::array{"edge.x-", "edge.x+", "edge.y-", "edge.y+"}[e]);
-  std::vector<Vec3> last_centres, start_centres;
-  std::vector<Vec3> last_forces;
-  if (bodies)
-    for (Index b = 0; b < bodies->num_bodies(); ++b) {
-      last_centres.push_back(model.bodies[b].center);
-      last_forces.push_back(Vec3::Zero());
-    }
+  // The edge bodies' centres and forces at the last increment (their initial state before the
+  // first), and their centres at the start of the loading step.
+  std::array<Index, 4> edge{};
+  bool edges = bodies != nullptr;
+  for (int e = 0; e < 4 && edges; ++e) edges = (edge[e] = model.body_index(kEdgeBodies[e])) >= 0;
+  std::array<Vec3, 4> centre{}, force{}, start{};
+  for (int e = 0; e < 4 && edges; ++e) {
+    centre[e] = model.bodies[edge[e]].center;
+    force[e] = Vec3::Zero();
+  }
   int curves_step = -1;
   std::ofstream curves;
   nlohmann::json curves_files = nlohmann::json::array();
-  auto curve_row = [&](const std::string& step, int increment, double load, const std::vector<Vec3>& centre,
-                       const std::vector<Vec3>& force, double elements, double penetration) {
-    const Vec3 &x0 = start_centres[edge[0]], &x1 = start_centres[edge[1]], &y0 = start_centres[edge[2]],
-               &y1 = start_centres[edge[3]];
-    const double lx = x1.x() - x0.x(), ly = y1.y() - y0.y();
-    const double warp_strain = (centre[edge[1]].x() - centre[edge[0]].x()) / lx - 1.0;
-    const double weft_strain = (centre[edge[3]].y() - centre[edge[2]].y()) / ly - 1.0;
-    const double offset = (centre[edge[3]].x() - centre[edge[2]].x()) - (y1.x() - y0.x());
+  auto curve_row = [&](const std::string& step, int increment, double load, double elements, double penetration) {
+    const double lx = start[1].x() - start[0].x(), ly = start[3].y() - start[2].y();
+    const double warp_strain = (centre[1].x() - centre[0].x()) / lx - 1.0;
+    const double weft_strain = (centre[3].y() - centre[2].y()) / ly - 1.0;
+    const double offset = (centre[3].x() - centre[2].x()) - (start[3].x() - start[2].x());
     const double angle = std::atan2(offset, ly) * 180.0 / std::numbers::pi;
     curves << fmt::format("{},{},{},{},{},{},{},{},{},{},{}\n", step, increment, load, warp_strain, weft_strain,
-                          force[edge[1]].x(), force[edge[3]].y(), angle, force[edge[3]].x(), elements, penetration);
+                          force[1].x(), force[3].y(), angle, force[3].x(), elements, penetration);
     curves.flush();
   };
   auto observer = [&](const IncrementInfo& info, const VecX& q) {
-    const StepSpec::Kind step_kind = c.steps[info.step_index].kind;
-    if ((step_kind == StepSpec::Kind::Biaxial || step_kind == StepSpec::Kind::Shear) && info.step_index != curves_step &&
-        edge[0] >= 0 && edge[1] >= 0 && edge[2] >= 0 && edge[3] >= 0) {
+    const StepSpec& st = c.steps[info.step_index];
+    if (edges && st.is_test() && info.step_index != curves_step) {
       // A new loading step: its curves start from the state at its start.
       curves_step = info.step_index;
-      start_centres = last_centres;
+      start = centre;
       const std::string name = "curves_" + file_stem(info.step) + ".csv";
       if (curves.is_open()) curves.close();
       curves.open(writer.dir() + "/" + name, std::ios::trunc);
       if (!curves) throw RunError(fmt::format("cannot open for writing '{}/{}'", writer.dir(), name));
       curves << "step,increment,load_factor,warp_strain,weft_strain,warp_force,weft_force,shear_angle_deg,"
                 "shear_force,contact_elements,max_penetration_ratio\n";
-      curve_row(info.step, 0, 0.0, last_centres, last_forces, std::nan(""), std::nan(""));
-      const StepSpec& st = c.steps[info.step_index];
+      curve_row(info.step, 0, 0.0, std::nan(""), std::nan(""));
       curves_files.push_back({{"step", info.step},
-                              {"kind", step_kind_name(step_kind)},
+                              {"kind", StepSpec::kind_name(st.kind)},
                               {"file", name},
                               {"strain", st.strain},
                               {"ratio", st.ratio},
                               {"angle", st.angle}});
     }
-    if (bodies) {
-      for (Index b = 0; b < bodies->num_bodies(); ++b) {
-        last_centres[b] = info.bodies[b].center;
-        last_forces[b] = info.bodies[b].force;
+    if (edges) {
+      for (int e = 0; e < 4; ++e) {
+        centre[e] = info.bodies[edge[e]].center;
+        force[e] = info.bodies[edge[e]].force;
       }
       if (info.step_index == curves_step && info.settled)
-        curve_row(info.step, info.increment, info.load_factor, last_centres, last_forces,
-                  double(info.contact.elements), info.contact.max_penetration_ratio);
+        curve_row(info.step, info.increment, info.load_factor, double(info.contact.elements),
+                  info.contact.max_penetration_ratio);
     }
     std::optional<FabricReport> rep;
     if (fabric) {
@@ -188,9 +168,9 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     if (relax) row.extra.push_back(info.relax_residual);
     if (rep) row.extra.insert(row.extra.end(), {rep->warp_crimp, rep->weft_crimp, rep->thickness});
     if (rep && info.step_end) {
-      const StepSpec::Kind kind = c.steps[info.step_index].kind;
+      const StepSpec::Kind kind = st.kind;
       fabric_steps.push_back({{"step", info.step},
-                              {"kind", step_kind_name(kind)},
+                              {"kind", StepSpec::kind_name(kind)},
                               {"warp_crimp", num(rep->warp_crimp)},
                               {"weft_crimp", num(rep->weft_crimp)},
                               {"thickness", num(rep->thickness)},
@@ -204,10 +184,10 @@ RunReport run_case(const Case& c, const RunOptions& options) {
         const std::string stem = writer.dir() + "/slices/" + file_stem(info.step);
         const std::string title = c.title.empty() ? c.name : c.title;
         write_slice(stem + "_x", model, q, c.tows, 0, rep->section_x,
-                    fmt::format("{}: step {} ({}), x = {:.4g} mm", title, info.step, step_kind_name(kind),
+                    fmt::format("{}: step {} ({}), x = {:.4g} mm", title, info.step, StepSpec::kind_name(kind),
                                 1e3 * rep->section_x));
         write_slice(stem + "_y", model, q, c.tows, 1, rep->section_y,
-                    fmt::format("{}: step {} ({}), y = {:.4g} mm", title, info.step, step_kind_name(kind),
+                    fmt::format("{}: step {} ({}), y = {:.4g} mm", title, info.step, StepSpec::kind_name(kind),
                                 1e3 * rep->section_y));
       }
     }

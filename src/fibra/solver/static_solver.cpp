@@ -208,8 +208,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   // node a multiple of the contact penalty) keeps each increment well posed while loose
   // fibers are pushed through their crossing partners; the relax step removes it.
   // Relax, biaxial and shear steps: proximal increments (below).
-  const StepSpec::Kind kind = m_case.steps[step].kind;
-  const bool relax = kind == StepSpec::Kind::Relax || kind == StepSpec::Kind::Biaxial || kind == StepSpec::Kind::Shear;
+  const bool relax = m_case.steps[step].is_proximal();
   const double k0 = m_contact->initial_stiffness();
   // Relax: each increment is a proximal-point step, a drag of adaptive stiffness (run())
   // towards the increment's start.
@@ -535,27 +534,25 @@ void StaticSolver::test_conditions(int step, std::map<Index, std::pair<double, d
   // METHOD §7. The fabric's edge bodies are driven from where they are at the step's start:
   // strains and angles are measured from there, not from the flat starting assembly.
   const StepSpec& st = m_case.steps[step];
-  const char* names[4] = {"edge.x-", "edge.x+", "edge.y-", "edge.y+"};
   int edge[4];
   for (int e = 0; e < 4; ++e) {
-    edge[e] = m_model.body_index(names[e]);
+    edge[e] = m_model.body_index(kEdgeBodies[e]);
     if (edge[e] < 0)
       throw InputError(m_case.file, fmt::format("step[{}].kind", step),
                        fmt::format("a {} step drives the fabric's edge bodies; there is no body \"{}\"",
-                                   st.kind == StepSpec::Kind::Biaxial ? "biaxial" : "shear", names[e]));
+                                   StepSpec::kind_name(st.kind), kEdgeBodies[e]));
   }
   auto dof = [&](int e, int k) { return m_model.bodies[edge[e]].first_dof + k; };
   auto u = [&](int e, int k) { return m_q[dof(e, k)] - m_model.reference[dof(e, k)]; };
   auto centre = [&](int e) { return Vec3(m_q.segment<3>(dof(e, 0))); };
   // Every component held where it is; then the driven and the free ones.
-  auto hold = [&](int e, int k) {
-    if (k < 3)
+  for (int e = 0; e < 4; ++e) {
+    const Vec3 rotation = m_bodies->rotation(edge[e], m_q);
+    for (int k = 0; k < 3; ++k) {
       disp[dof(e, k)] = {u(e, k), u(e, k)};
-    else
-      disp[dof(e, k)] = {m_bodies->rotation(edge[e], m_q)[k - 3], m_bodies->rotation(edge[e], m_q)[k - 3]};
-  };
-  for (int e = 0; e < 4; ++e)
-    for (int k = 0; k < 6; ++k) hold(e, k);
+      disp[dof(e, 3 + k)] = {rotation[k], rotation[k]};
+    }
+  }
   const double lx = centre(1).x() - centre(0).x(), ly = centre(3).y() - centre(2).y();
   if (st.kind == StepSpec::Kind::Biaxial) {
     // Warp edges pulled apart by strain x their distance; the weft ones by ratio x that
@@ -579,7 +576,7 @@ void StaticSolver::test_conditions(int step, std::map<Index, std::pair<double, d
     disp.erase(dof(e, 1));
     disp.erase(dof(e, 5));
     for (const BindingSpec& b : m_case.bindings) {
-      if (b.body != names[e]) continue;
+      if (b.body != kEdgeBodies[e]) continue;
       for (const std::string& child : b.bodies) {
         const int cb = m_model.body_index(child);
         if (cb >= 0) disp.erase(m_model.bodies[cb].first_dof + 5);
@@ -653,7 +650,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       if (bs.force) p.force_end.segment<3>(d0) = *bs.force;
       if (bs.moment) p.force_end.segment<3>(d0 + 3) = *bs.moment;
     }
-    if (st.kind == StepSpec::Kind::Biaxial || st.kind == StepSpec::Kind::Shear) test_conditions(step, disp);
+    if (st.is_test()) test_conditions(step, disp);
     p.disp = disp;
 
     m_weave_depth = -1.0;  // measured at the step's first detection
@@ -671,9 +668,9 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     // Biaxial and shear steps (tests of a woven fabric) take the same proximal increments, and
     // each load level is repeated at the same load factor until its drag force is negligible
     // and its normals settled: every point of their curves is an equilibrium without drag.
-    const bool test = st.kind == StepSpec::Kind::Biaxial || st.kind == StepSpec::Kind::Shear;
-    const bool relax = (st.kind == StepSpec::Kind::Relax || test) && m_contact && opt.relax_drag > 0.0;
-    bool level_settled = true;
+    const bool relax = st.is_proximal() && m_contact && opt.relax_drag > 0.0;
+    const bool test = relax && st.is_test();
+    bool level_settled = true;  // stays true but in tests, where a level repeats until it settles
     const double k0 = m_contact ? m_contact->initial_stiffness() : 0.0;
     const double relax_max = std::max(opt.weave_drag, opt.relax_drag) * k0, relax_min = 1e-9 * k0;
     m_relax_drag = relax ? opt.relax_drag * k0 : 0.0;
@@ -681,7 +678,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     bool relaxed = !relax;
     while (lambda < 1.0 - 1e-12 || !relaxed) {
       dl = std::min(dl, 1.0 - lambda);
-      const double step_dl = relax && test && !level_settled ? 0.0 : dl;
+      const double step_dl = level_settled ? dl : 0.0;
       const VecX saved = m_q;
       m_q_start = m_q;
       const std::vector<ContactElement> saved_contacts = m_contact ? m_problem->contacts() : std::vector<ContactElement>{};
@@ -773,7 +770,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       info.wall_time = seconds_since(t_start);
       info.increment_time = seconds_since(t_increment);
       info.step_end = lambda >= 1.0 && relaxed;
-      info.settled = !(relax && test) || level_settled;
+      info.settled = level_settled;
       info.relax_residual = relax ? m_relax_residual : 0.0;
       info.reactions = reactions(m_gradient);
       if (m_bodies) {
