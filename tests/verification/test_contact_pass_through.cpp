@@ -116,5 +116,47 @@ elements = 4
   EXPECT_FALSE(contacts.crossed(start, start));
 }
 
+// Two fibers side by side in one plane at 10 degrees, touching with 3 % penetration (as in a
+// flattened tow): a slight motion of one across their plane changes the side of its chord along
+// the common normal (their lines meet beyond the chords' ends), but they never go through each
+// other. Going down through the other by the same route is still a crossing.
+TEST(ContactPassThrough, SweptCheckLetsSideBySideFibersMoveAcrossTheirPlane) {
+  const double r = 20e-6, angle = 10.0 * std::acos(-1.0) / 180.0, y0 = 0.97 * 2.0 * r;
+  const std::string toml = fmt::format(R"(
+[[material]]
+name = "glass"
+young = 72e9
+poisson = 0.22
+[[fiber]]
+name = "a"
+material = "glass"
+radius = {r}
+points = [[-0.5e-3, 0, 0], [0.5e-3, 0, 0]]
+elements = 1
+[[fiber]]
+name = "b"
+material = "glass"
+radius = {r}
+points = [[-0.5e-3, {y0}, 1e-6], [{x1}, {y1}, 1e-6]]
+elements = 1
+[contact]
+[[step]]
+)",
+                                       fmt::arg("r", r), fmt::arg("y0", y0), fmt::arg("x1", -0.5e-3 + 1e-3 * std::cos(angle)),
+                                       fmt::arg("y1", y0 + 1e-3 * std::sin(angle)));
+  const Case c = parse_case_toml(toml, "side_by_side.toml");
+  const Model model = build_model(c);
+  ContactManager contacts(model, c.contact);
+  const VecX start = model.reference;
+  auto moved = [&](const Vec3& shift) {
+    VecX q = start;
+    const Fiber& b = model.fibers[1];
+    for (Index k = 0; k < b.num_nodes; ++k) q.segment<3>(9 * (b.first_node + k)) += shift;
+    return q;
+  };
+  EXPECT_FALSE(contacts.crossed(start, moved(Vec3(0, 0, -2e-6))));        // 1 um above to 1 um below
+  EXPECT_TRUE(contacts.crossed(start, moved(Vec3(0, -2.0 * y0, -2e-6))));  // through a to its other side
+}
+
 }  // namespace
 }  // namespace fibra::test

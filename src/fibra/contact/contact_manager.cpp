@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <map>
+
+#include <fmt/core.h>
 
 #include "fibra/beam/beam_element.hpp"
 #include "fibra/contact/broad_phase.hpp"
@@ -11,6 +14,13 @@
 
 namespace fibra {
 namespace {
+
+// FIBRA_DEBUG_NEWTON set (the solver's debug switch): the pass-through checks say which pair
+// cut an increment.
+bool debug_contact() {
+  static const bool on = std::getenv("FIBRA_DEBUG_NEWTON") != nullptr;
+  return on;
+}
 
 // Centre of the section of particle p (x0 at its eta) and the element dofs pointer.
 Vec3 section_centre(const Model& model, const Particle& p, const VecX& q) {
@@ -190,8 +200,12 @@ bool ContactManager::passed_through(const std::vector<ContactElement>& contacts,
                                     const std::vector<ContactResponse>& responses) const {
   for (size_t k = 0; k < contacts.size(); ++k)
     if (contacts[k].fresh && -responses[k].gap > 0.5 * pair_radius(contacts[k]) &&
-        -responses[k].gap > 4.0 * m_spec.max_penetration * pair_radius(contacts[k]))
+        -responses[k].gap > 4.0 * m_spec.max_penetration * pair_radius(contacts[k])) {
+      if (debug_contact())
+        fmt::print(stderr, " passed through: elements {} and {}, penetration {:.3e} (radius {:.3e})\n",
+                   contacts[k].a.element, contacts[k].b.element, -responses[k].gap, pair_radius(contacts[k]));
       return true;
+    }
   return false;
 }
 
@@ -256,7 +270,15 @@ bool ContactManager::crossed(const VecX& q_start, const VecX& q) const {
     double s, t;
     closest_points(pa0, pa1, pb0, pb1, s, t);
     const double gap = (pb0 + t * (pb1 - pb0) - pa0 - s * (pa1 - pa0)).norm();
-    if (gap < radius(pr.first) + radius(pr.second)) return true;
+    // Through each other: closer than half the sum of the radii when the side changed. Fibers
+    // side by side (touching, with the allowed penetration) at a small angle change side with
+    // the slightest motion across their plane, their lines meeting beyond the chords' ends:
+    // that is not a crossing.
+    if (gap < 0.5 * (radius(pr.first) + radius(pr.second))) {
+      if (debug_contact())
+        fmt::print(stderr, " crossed: elements {} and {}, gap {:.3e} at tau {:.3f}\n", pr.first, pr.second, gap, tau);
+      return true;
+    }
   }
   return false;
 }

@@ -62,7 +62,8 @@ class ContactManager {
   /// broad phase at the mid state with boxes grown by the largest nodal motion; each element is
   /// taken as its chord (moving linearly in time), and a crossing is a sign change, along the
   /// chords' common normal, of the vector between their closest points, with the chords closer
-  /// than the sum of the radii when it vanishes (not passing around an end).
+  /// than half the sum of the radii when it vanishes (through each other, not around an end nor
+  /// side by side).
   bool crossed(const VecX& q_start, const VecX& q) const;
   /// Largest penetration of `contacts` at q (gaps along their own normals), divided by the
   /// allowed penetration of each pair.
