@@ -1,5 +1,6 @@
 // fibra: command-line program. Parses arguments, validates the case, runs it, reports;
-// writes the generated assembly of a case (generate) and slices of a run's result (slice).
+// writes the generated assembly of a case (generate), slices of a run's result (slice) and
+// plots of the loading curves of one or several runs (plot).
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -16,7 +17,9 @@
 #include "fibra/core/error.hpp"
 #include "fibra/io/case_reader.hpp"
 #include "fibra/io/case_writer.hpp"
+#include "fibra/io/curve_plots.hpp"
 #include "fibra/io/output_writer.hpp"
+#include "fibra/io/result_curves.hpp"
 #include "fibra/io/slice.hpp"
 #include "fibra/model/fabric_report.hpp"
 #include "fibra/model/model.hpp"
@@ -36,6 +39,26 @@ int check(const std::string& path) {
   fmt::print("{}: valid: {} materials, {} fibers, {} nodes, {} dofs, {} steps\n", path, c.materials.size(),
              c.fibers.size(), model.num_nodes(), model.num_dofs(), c.steps.size());
   return 0;
+}
+
+/// "a, b, c" of a list of file names.
+std::string join_names(const std::vector<std::string>& names) { return fmt::format("{}", fmt::join(names, ", ")); }
+
+/// Where a run's results are, as one short list: the ParaView views, the curves and their
+/// plots (PNG and SVG; the JSON sidecars are for scripts), the slices, the rest.
+void print_results(const std::string& out, const fibra::RunReport& r) {
+  fmt::print("results in {}/:\n", out);
+  fmt::print("  ParaView  {}\n", join_names(r.paraview));
+  if (!r.curves.empty()) fmt::print("  curves    {}\n", join_names(r.curves));
+  std::vector<std::string> figures;
+  for (const std::string& f : r.plots)
+    if (!f.ends_with(".json")) figures.push_back(f);
+  if (!figures.empty()) fmt::print("  plots     {}\n", join_names(figures));
+  if (!r.slices.empty()) fmt::print("  slices    {}/ ({} files)\n", "slices", r.slices.size());
+  if (!r.states.empty())
+    fmt::print("  states    {} (a case goes on from them with [start] from = \"{}\")\n", join_names(r.states),
+               std::filesystem::absolute(out).lexically_normal().string());
+  fmt::print("  also      history.csv, nodes.csv, summary.json, case.toml\n");
 }
 
 int run(const std::string& path, std::string out, int threads, bool progress_lines) {
@@ -58,11 +81,13 @@ int run(const std::string& path, std::string out, int threads, bool progress_lin
   std::signal(SIGTERM, on_interrupt);
   const fibra::RunReport r = fibra::run_case(c, options);
   if (tty && !progress_lines) fmt::print(stderr, "\n");
+  // Missing plots never fail a run: one warning, the curves are there.
+  if (!r.plots_error.empty()) fmt::print(stderr, "warning: no plots of the curves: {}\n", r.plots_error);
   const auto& s = r.stats;
   if (r.result.status == fibra::RunResult::Status::Converged) {
     fmt::print("{}: converged: {} increments, {} Newton iterations, {:.2f} s ({} nodes, {} dofs)\n", path,
                s.increments, s.iterations, r.wall_time, r.nodes, r.dofs);
-    fmt::print("results in {}/ (fibers.pvd, history.csv, nodes.csv, summary.json)\n", out);
+    print_results(out, r);
     return 0;
   }
   fmt::print(stderr, "{}: {}: {}\n", path, r.result.status_name(), r.result.message);
@@ -72,6 +97,7 @@ int run(const std::string& path, std::string out, int threads, bool progress_lin
     fmt::print(stderr, "\n");
   }
   fmt::print(stderr, "outputs of every converged increment kept in {}/ (see summary.json)\n", out);
+  print_results(out, r);
   return r.result.status == fibra::RunResult::Status::Interrupted ? 130 : 1;
 }
 
@@ -244,6 +270,21 @@ int slice(const std::string& dir, const std::vector<std::string>& plane_texts, c
   return 0;
 }
 
+/// `fibra plot`: the curves of one or several runs, one figure per step name, overlaid.
+int plot(const std::vector<std::string>& dirs, const std::string& out) {
+  const fibra::CurveOverlay overlay = fibra::overlay_curves(dirs, out);
+  for (const std::string& note : overlay.notes) fmt::print("note: {}\n", note);
+  const fibra::PlotOutcome outcome = fibra::plot_curves(overlay.figures);
+  if (!outcome.ok())
+    throw fibra::RunError(fmt::format("no plots: {} (the figures need Python 3 with matplotlib: /usr/bin/python3 "
+                                      "by default, or set FIBRA_PYTHON)",
+                                      outcome.error));
+  for (const fibra::CurveFigure& f : overlay.figures)
+    fmt::print("step {} ({}, {} run{}): {}.png, {}.svg, {}.json\n", f.step, f.kind, f.runs.size(),
+               f.runs.size() == 1 ? "" : "s", f.stem, f.stem, f.stem);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -286,11 +327,18 @@ int main(int argc, char** argv) {
       ->required()
       ->allow_extra_args(false);
   slice_cmd->add_option("--out", out, "file stem (default RESULT/slices/slice_<axis>_<value>)");
+  std::vector<std::string> plot_dirs;
+  auto* plot_cmd = app.add_subcommand(
+      "plot", "draw the loading curves of biaxial and shear steps (PNG, SVG, JSON), several runs overlaid");
+  plot_cmd->add_option("results", plot_dirs, "output directories of `fibra run` (hold summary.json and curves_*.csv)")
+      ->required();
+  plot_cmd->add_option("--out", out, "directory of the figures (default RESULT/plots for one result; required for several)");
   CLI11_PARSE(app, argc, argv);
   try {
     if (*run_cmd) return run(case_path, out, threads, progress_lines);
     if (*generate_cmd) return generate(case_path, out);
     if (*slice_cmd) return slice(result_dir, planes, out);
+    if (*plot_cmd) return plot(plot_dirs, out);
     return check(case_path);
   } catch (const fibra::InputError& e) {
     fmt::print(stderr, "error: {}\n", e.what());

@@ -213,6 +213,7 @@ inline void expect_same_case(const Case& a, const Case& b, bool compare_fabric =
 
   EXPECT_EQ(a.output.every, b.output.every);
   EXPECT_EQ(a.output.tube_sides, b.output.tube_sides);
+  EXPECT_EQ(a.output.plots, b.output.plots);
 
   if (!compare_fabric) return;
   ASSERT_EQ(a.fabric.has_value(), b.fabric.has_value());

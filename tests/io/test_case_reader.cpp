@@ -113,6 +113,7 @@ linear_solver = "eigen"
 [output]
 every = 2
 tube_sides = 16
+plots = false
 )";
 
 /// The smallest valid case: everything else takes its default.
@@ -292,6 +293,7 @@ TEST(CaseReader, ParsesEveryPartOfTheSchema) {
   EXPECT_EQ(c.solver.linear_solver, "eigen");
   EXPECT_EQ(c.output.every, 2);
   EXPECT_EQ(c.output.tube_sides, 16);
+  EXPECT_FALSE(c.output.plots);
 }
 
 TEST(CaseReader, MinimalCaseTakesDefaults) {
@@ -323,6 +325,7 @@ TEST(CaseReader, MinimalCaseTakesDefaults) {
   EXPECT_EQ(c.solver.binding_stiffness, solver_defaults.binding_stiffness);
   EXPECT_EQ(c.output.every, 1);
   EXPECT_EQ(c.output.tube_sides, 12);
+  EXPECT_TRUE(c.output.plots);
 }
 
 TEST(CaseReader, ArcAndHelixDefaults) {

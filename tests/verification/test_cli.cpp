@@ -18,6 +18,7 @@
 #include "fibra/io/case_reader.hpp"
 #include "fibra/io/case_writer.hpp"
 #include "io/case_compare.hpp"
+#include "support/curve_checks.hpp"
 #include "support/fabric_cases.hpp"
 
 namespace fibra {
@@ -559,6 +560,19 @@ increments = 2
   ASSERT_TRUE(s.contains("curves")) << s.dump();
   EXPECT_EQ(s["curves"][0]["file"], "curves_pull.csv");
   EXPECT_EQ(s["curves"][0]["kind"], "biaxial");
+
+  // The step's plots (tests/verification/test_plots.cpp has the rest): the sidecar shows the
+  // curves' numbers, warp and weft; the PNG is one; the SVG has its axis labels as text.
+  EXPECT_EQ(s["plots"], (nlohmann::json{"plots/pull.png", "plots/pull.svg", "plots/pull.json"})) << r.err;
+  const nlohmann::json sidecar = test::read_sidecar(out / "plots" / "pull.json");
+  ASSERT_EQ(sidecar["series"].size(), 2u);
+  for (const nlohmann::json& series : sidecar["series"])
+    test::expect_series_matches_csv(series, out / "plots" / "pull.json");
+  EXPECT_EQ(test::png_size(out / "plots" / "pull.png"), std::make_pair(960u, 720u));
+  const std::string svg = slurp(out / "plots" / "pull.svg");
+  EXPECT_NE(svg.find("axial strain [%]"), std::string::npos);
+  EXPECT_NE(svg.find("axial force [N]"), std::string::npos);
+  EXPECT_TRUE(fs::is_regular_file(out / "slices" / "pull_x.svg"));
 }
 
 TEST_F(Cli, SliceOfARunWritesSvgAndPng) {

@@ -13,23 +13,15 @@
 #include "fibra/io/case_reader.hpp"
 #include "fibra/model/model.hpp"
 #include "fibra/run/run_case.hpp"
+#include "support/example_files.hpp"
 
 namespace fibra {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::vector<fs::path> example_cases() {
-  std::vector<fs::path> out;
-  const fs::path root = fs::path(FIBRA_SOURCE_DIR) / "examples";
-  for (const fs::directory_entry& dir : fs::directory_iterator(root)) {
-    if (!dir.is_directory()) continue;
-    for (const fs::directory_entry& f : fs::directory_iterator(dir.path()))
-      if (f.is_regular_file() && f.path().extension() == ".toml") out.push_back(f.path());
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
+// The examples that go on from an earlier run ([start]) are read by test_continue.cpp.
+std::vector<fs::path> example_cases() { return test::standalone_examples(); }
 
 TEST(Examples, ThereAreExamples) {
   const std::vector<fs::path> cases = example_cases();

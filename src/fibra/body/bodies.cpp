@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <stdexcept>
 
 #include "fibra/body/rotation.hpp"
 #include "fibra/core/error.hpp"
@@ -239,6 +240,31 @@ std::vector<double> BodySystem::multipliers() const {
 void BodySystem::set_multipliers(const std::vector<double>& values) {
   for (size_t k = 0; k < m_bindings.size(); ++k)
     for (int i = 0; i < 6; ++i) m_bindings[k].lambda[i] = values.at(6 * k + i);
+}
+
+std::vector<double> BodySystem::snapshot() const {
+  std::vector<double> out;
+  out.reserve(12 * m_bodies.size() + 6 * m_bindings.size());
+  for (const BodyData& b : m_bodies) {
+    out.insert(out.end(), b.frame_ref.data(), b.frame_ref.data() + 9);
+    out.insert(out.end(), b.rotation.data(), b.rotation.data() + 3);
+  }
+  const std::vector<double> lambda = multipliers();
+  out.insert(out.end(), lambda.begin(), lambda.end());
+  return out;
+}
+
+void BodySystem::restore(const std::vector<double>& values) {
+  if (values.size() != 12 * m_bodies.size() + 6 * m_bindings.size())
+    throw std::invalid_argument(fmt::format("body state of {} values, {} expected", values.size(),
+                                            12 * m_bodies.size() + 6 * m_bindings.size()));
+  const double* v = values.data();
+  for (BodyData& b : m_bodies) {
+    b.frame_ref = Eigen::Map<const Mat3>(v);
+    b.rotation = Eigen::Map<const Vec3>(v + 9);
+    v += 12;
+  }
+  set_multipliers(std::vector<double>(v, values.data() + values.size()));
 }
 
 double BodySystem::binding_energy(const Binding& b, const VecX& q, VecX* grad, Eigen::MatrixXd* hess) const {

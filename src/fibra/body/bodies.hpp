@@ -77,6 +77,11 @@ class BodySystem {
   /// Multipliers of all bindings (6 per binding, body frame), to save and restore.
   std::vector<double> multipliers() const;
   void set_multipliers(const std::vector<double>& values);  ///< restores multipliers()
+  /// The state that outlives an increment: per body the committed frame (9 values, column
+  /// major) and accumulated rotation (3), then the multipliers (6 per binding).
+  std::vector<double> snapshot() const;
+  /// Restores snapshot(); throws std::invalid_argument if its size does not match.
+  void restore(const std::vector<double>& values);
   /// Penalty of binding k [N/m].
   double stiffness(Index k) const { return m_bindings[k].k; }
 

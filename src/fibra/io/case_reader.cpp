@@ -335,8 +335,10 @@ struct KeyHint {
 using Keys = std::vector<std::string_view>;
 
 /// The keys of the top level of a case file.
-const Keys kTopLevelKeys = {"title", "material", "fiber", "fabric", "fix",     "body",  "binding",
-                            "tow",   "weave",    "step",  "solver", "contact", "output"};
+const Keys kTopLevelKeys = {"title", "material", "fiber",  "fabric",  "fix",    "body",  "binding",
+                            "tow",   "weave",    "start", "step",    "solver", "contact", "output"};
+// The model keys: a case with [start] takes its model from the earlier run instead.
+const Keys kModelKeys = {"material", "fiber", "fabric", "fix", "body", "binding", "tow", "weave"};
 
 /// The first words of the named weave patterns (model/fabric.hpp), for suggestions.
 const Keys kWeaveWords = {"plain", "twill", "basket", "satin"};
@@ -351,6 +353,13 @@ class Reader {
   Case read(const Value& root) const;
 
  private:
+  /// [[step]]: names checked against every fiber and body (generated ones included).
+  void read_steps(const Value& root, Case& c, const std::vector<FiberSpec>& all_fibers,
+                  const std::vector<BodySpec>& all_bodies) const;
+  /// A case with [start]: the model of an earlier run's result directory (its case.toml), its
+  /// state at the end of its last step, and this file's steps (solver, contact and output
+  /// settings replace the earlier run's when given).
+  Case read_continued(const Value& root, const Value& start) const;
   [[noreturn]] void fail(const std::string& key, const std::string& message, const Value* at) const {
     std::string full = message;
     if (at != nullptr && at->line > 0) full += fmt::format(" (line {})", at->line);
@@ -1697,15 +1706,126 @@ ContactSpec Reader::read_contact(const Value& t, const std::string& path) const 
 
 OutputSpec Reader::read_output(const Value& t, const std::string& path) const {
   expect_table(t, path);
-  check_keys(t, path, {"every", "tube_sides"});
+  check_keys(t, path, {"every", "tube_sides", "plots"});
   OutputSpec o;
   if (const Value* v = find(t, "every")) o.every = to_int(*v, join(path, "every"), 1);
   if (const Value* v = find(t, "tube_sides")) o.tube_sides = to_int(*v, join(path, "tube_sides"), 3);
+  if (const Value* v = find(t, "plots")) o.plots = to_bool(*v, join(path, "plots"));
   return o;
+}
+
+void Reader::read_steps(const Value& root, Case& c, const std::vector<FiberSpec>& all_fibers,
+                        const std::vector<BodySpec>& all_bodies) const {
+  const std::string fabric_word = m_json ? "a fabric object" : "a [fabric]";
+  const Value& v = require(root, "", "step", table_array_word("step"));
+  const std::vector<Value>& tables = to_table_array(v, "step", "step");
+  if (tables.empty()) fail("step", "at least one step is required", &v);
+  for (std::size_t i = 0; i < tables.size(); ++i) {
+    const std::string path = item("step", i);
+    StepSpec s = read_step(tables[i], path, i, all_fibers, all_bodies);
+    for (std::size_t j = 0; j < c.steps.size(); ++j) {
+      if (c.steps[j].name == s.name) {
+        fail(join(path, "name"),
+             fmt::format("duplicate step name \"{}\" (already used by step[{}])", s.name, j),
+             find(tables[i], "name") ? find(tables[i], "name") : &tables[i]);
+      }
+    }
+    // Biaxial and shear steps drive the four edge bodies a fabric generates.
+    if (s.is_test() && !c.fabric) {
+      for (const char* edge : kEdgeBodies) {
+        if (std::none_of(c.bodies.begin(), c.bodies.end(), [&](const BodySpec& b) { return b.name == edge; }))
+          fail(join(path, "kind"),
+               fmt::format("a {} step drives the edge bodies of a fabric (edge.x-, edge.x+, edge.y-, edge.y+); "
+                           "there is no body \"{}\": give {}",
+                           StepSpec::kind_name(s.kind), edge, fabric_word),
+               find(tables[i], "kind"));
+      }
+    }
+    // A weave step orients the contacts between crossing tows by the weave pattern.
+    if (s.kind == StepSpec::Kind::Weave) {
+      const std::string key = join(path, "kind");
+      if (c.tows.empty() && !c.fabric) {
+        fail(key,
+             fmt::format("a weave step needs tows: define {} entries (or {})", m_json ? "tow" : "[[tow]]",
+                         fabric_word),
+             find(tables[i], "kind"));
+      }
+      if (c.weave.empty() && !c.fabric) {
+        fail(key,
+             fmt::format("a weave step needs the weave pattern: give {} (matrix or pattern)",
+                         m_json ? "a weave object" : "a [weave] table"),
+             find(tables[i], "kind"));
+      }
+    }
+    c.steps.push_back(std::move(s));
+  }
+}
+
+Case Reader::read_continued(const Value& root, const Value& start) const {
+  for (const std::string_view key : kModelKeys)
+    if (const Value* v = find(root, key))
+      fail(std::string(key),
+           fmt::format("a case with [start] takes its model (materials, fibers, fabric, bodies, ...) from the run it "
+                       "goes on from: remove the {} here, or remove [start] to build the model from this file",
+                       key),
+           v);
+  expect_table(start, "start");
+  check_keys(start, "start", {"from", "step"});
+  const Value& from_value =
+      require(start, "start", "from", "a string: the result directory (--out) of an earlier run to go on from");
+  const std::string from = to_string(from_value, "start.from");
+  namespace fs = std::filesystem;
+  fs::path dir(from);
+  if (dir.is_relative()) dir = fs::path(m_file).parent_path() / dir;
+  dir = dir.lexically_normal();
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec) || !fs::is_regular_file(dir / "case.toml", ec))
+    fail("start.from",
+         fmt::format("no result directory \"{}\" (expected the output directory of an earlier run, holding its "
+                     "case.toml and state/; a relative path is taken from this file's directory)",
+                     dir.string()),
+         &from_value);
+  // The earlier run's model as it ran (its case.toml: a fabric expanded into fibers, bodies and
+  // tows); its errors name that file.
+  Case c = read_case((dir / "case.toml").string());
+  c.start = dir.string();
+  // The state: at the end of the step named, or of the last step that ended.
+  const auto state_of = [&](const std::string& step) { return dir / "state" / (step_file_stem(step) + ".bin"); };
+  if (const Value* v = find(start, "step")) {
+    c.start_step = to_string(*v, "start.step");
+    std::vector<std::string> names;
+    for (const StepSpec& s : c.steps) names.push_back(s.name);
+    if (std::find(names.begin(), names.end(), c.start_step) == names.end())
+      fail("start.step",
+           fmt::format("the run in \"{}\" has no step \"{}\"{} (its steps: {})", dir.string(), c.start_step,
+                       did_you_mean(c.start_step, names), list_names(names)),
+           v);
+    if (!fs::is_regular_file(state_of(c.start_step), ec))
+      fail("start.step",
+           fmt::format("the run in \"{}\" did not end its step \"{}\" (no {})", dir.string(), c.start_step,
+                       state_of(c.start_step).string()),
+           v);
+  } else {
+    for (auto s = c.steps.rbegin(); s != c.steps.rend() && c.start_step.empty(); ++s)
+      if (fs::is_regular_file(state_of(s->name), ec)) c.start_step = s->name;
+    if (c.start_step.empty())
+      fail("start.from",
+           fmt::format("the run in \"{}\" ended no step (no state/<step>.bin): nothing to go on from", dir.string()),
+           &from_value);
+  }
+  c.start_state = state_of(c.start_step).string();
+  if (const Value* v = find(root, "title")) c.title = to_string(*v, "title");
+  c.steps.clear();
+  read_steps(root, c, c.fibers, c.bodies);
+  if (const Value* v = find(root, "solver")) c.solver = read_solver(*v, "solver");
+  if (const Value* v = find(root, "output")) c.output = read_output(*v, "output");
+  if (const Value* v = find(root, "contact")) c.contact = read_contact(*v, "contact");
+  return c;
 }
 
 Case Reader::read(const Value& root) const {
   check_keys(root, "", kTopLevelKeys);
+  if (const Value* start = find(root, "start")) return read_continued(root, *start);
   Case c;
   c.file = m_file;  // expand_fabric names it in its messages
   if (const Value* v = find(root, "title")) c.title = to_string(*v, "title");
@@ -1859,51 +1979,7 @@ Case Reader::read(const Value& root) const {
     c.weave = matrix ? to_weave_matrix(*matrix, "weave.matrix") : to_named_weave(*pattern, "weave.pattern", name);
   }
 
-  // Steps.
-  {
-    const Value& v = require(root, "", "step", table_array_word("step"));
-    const std::vector<Value>& tables = to_table_array(v, "step", "step");
-    if (tables.empty()) fail("step", "at least one step is required", &v);
-    for (std::size_t i = 0; i < tables.size(); ++i) {
-      const std::string path = item("step", i);
-      StepSpec s = read_step(tables[i], path, i, all_fibers, all_bodies);
-      for (std::size_t j = 0; j < c.steps.size(); ++j) {
-        if (c.steps[j].name == s.name) {
-          fail(join(path, "name"),
-               fmt::format("duplicate step name \"{}\" (already used by step[{}])", s.name, j),
-               find(tables[i], "name") ? find(tables[i], "name") : &tables[i]);
-        }
-      }
-      // Biaxial and shear steps drive the four edge bodies a fabric generates.
-      if (s.is_test() && !c.fabric) {
-        for (const char* edge : kEdgeBodies) {
-          if (std::none_of(c.bodies.begin(), c.bodies.end(), [&](const BodySpec& b) { return b.name == edge; }))
-            fail(join(path, "kind"),
-                 fmt::format("a {} step drives the edge bodies of a fabric (edge.x-, edge.x+, edge.y-, edge.y+); "
-                             "there is no body \"{}\": give {}",
-                             StepSpec::kind_name(s.kind), edge, fabric_word),
-                 find(tables[i], "kind"));
-        }
-      }
-      // A weave step orients the contacts between crossing tows by the weave pattern.
-      if (s.kind == StepSpec::Kind::Weave) {
-        const std::string key = join(path, "kind");
-        if (c.tows.empty() && !c.fabric) {
-          fail(key,
-               fmt::format("a weave step needs tows: define {} entries (or {})", m_json ? "tow" : "[[tow]]",
-                           fabric_word),
-               find(tables[i], "kind"));
-        }
-        if (c.weave.empty() && !c.fabric) {
-          fail(key,
-               fmt::format("a weave step needs the weave pattern: give {} (matrix or pattern)",
-                           m_json ? "a weave object" : "a [weave] table"),
-               find(tables[i], "kind"));
-        }
-      }
-      c.steps.push_back(std::move(s));
-    }
-  }
+  read_steps(root, c, all_fibers, all_bodies);
 
   if (const Value* v = find(root, "solver")) c.solver = read_solver(*v, "solver");
   if (const Value* v = find(root, "output")) c.output = read_output(*v, "output");

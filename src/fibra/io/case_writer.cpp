@@ -304,6 +304,10 @@ void write_contact(std::string& out, const ContactSpec& c) {
 
 std::string write_case_toml(const Case& c) {
   std::string out;
+  // A continued case is written whole (its model inline): it reads alone, but starts from the
+  // reference configuration; the comment keeps where its run started.
+  if (!c.start.empty())
+    out += fmt::format("# This run went on from the state (state.bin) of the result directory {}\n", c.start);
   if (!c.title.empty()) out += fmt::format("title = {}\n", quoted(c.title));
   for (const MaterialSpec& m : c.materials) write_material(out, m);
   for (const FiberSpec& f : c.fibers) write_fiber(out, f);
@@ -324,6 +328,7 @@ std::string write_case_toml(const Case& c) {
   out += "\n[output]\n";
   out += fmt::format("every = {}\n", c.output.every);
   out += fmt::format("tube_sides = {}\n", c.output.tube_sides);
+  out += fmt::format("plots = {}\n", c.output.plots);
   if (out.front() == '\n') out.erase(0, 1);  // no title
   return out;
 }

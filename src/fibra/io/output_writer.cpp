@@ -275,7 +275,8 @@ OutputWriter::OutputWriter(std::string dir, const Model& model, std::vector<std:
 
   // Remove what a previous run in this directory left, so that no stale collection,
   // summary or numbered .vtu can be mistaken for output of this run.
-  static const std::regex numbered(R"((fibers|lines|contacts|bodies)_\d{6}\.vtu(\.tmp)?)");
+  static const std::regex numbered(R"((fibers|lines|contacts|bodies)_\d{6}\.vtu(\.tmp)?|curves_.*\.csv)");
+  fs::remove_all(path("state"), ec);  // the states at step ends, for runs that go on from them
   for (const char* name :
        {"fibers.pvd", "lines.pvd", "contacts.pvd", "bodies.pvd", "nodes.csv", "summary.json"})
     fs::remove(path(name), ec);

@@ -37,4 +37,14 @@ const char* StepSpec::kind_name(Kind k) {
   return "standard";
 }
 
+std::string step_file_stem(const std::string& step) {
+  std::string out;
+  for (char ch : step) {
+    const bool keep = (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') || ch == '.' ||
+                      ch == '-' || ch == '_';
+    out += keep ? ch : '_';
+  }
+  return out.empty() || out == "." || out == ".." ? "step" : out;
+}
+
 }  // namespace fibra

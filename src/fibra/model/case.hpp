@@ -231,9 +231,14 @@ struct ContactSpec {
 struct OutputSpec {
   int every = 1;               ///< write a .vtu every N converged increments (last always)
   int tube_sides = 12;         ///< polygon sides of the tube view of each fiber
+  bool plots = true;           ///< plots of the biaxial and shear steps' curves (plots/, needs matplotlib)
 };
 
 /// A whole case file.
+/// File name stem of a step's name (outputs named after a step: curves_<stem>.csv,
+/// state/<stem>.bin, slices): characters other than letters, digits, '.', '-', '_' become '_'.
+std::string step_file_stem(const std::string& step);
+
 struct Case {
   std::string file;   ///< path of the case file (for messages)
   std::string name;   ///< file stem, used for the default output directory
@@ -247,6 +252,11 @@ struct Case {
   std::vector<TowSpec> tows;                 ///< [[tow]] (or generated from [fabric])
   std::vector<std::vector<int>> weave;       ///< [weave] matrix (or from [fabric]); empty = none
   std::vector<StepSpec> steps;
+  /// [start] from: the result directory whose model and state this case goes on from; empty:
+  /// from the reference configuration.
+  std::string start;
+  std::string start_step;   ///< [start] step: the step of that run whose end state it goes on from
+  std::string start_state;  ///< that state's file (start/state/<step>.bin)
   SolverSpec solver;
   ContactSpec contact;
   OutputSpec output;

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <numbers>
 #include <nlohmann/json.hpp>
@@ -22,6 +23,8 @@
 #include "fibra/model/fabric.hpp"
 #include "fibra/model/fabric_report.hpp"
 #include "fibra/model/model.hpp"
+#include "fibra/run/curve_plotter.hpp"
+#include "fibra/solver/solver_state.hpp"
 
 namespace fibra {
 namespace {
@@ -47,16 +50,6 @@ void write_text_atomic(const std::string& path, const std::string& text) {
 }
 
 /// A step name as a file name: characters other than letters, digits, '.', '-', '_' become '_'.
-std::string file_stem(const std::string& name) {
-  std::string out;
-  for (char ch : name) {
-    const bool keep = (ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') || (ch >= '0' && ch <= '9') || ch == '.' ||
-                      ch == '-' || ch == '_';
-    out += keep ? ch : '_';
-  }
-  return out.empty() || out == "." || out == ".." ? "step" : out;
-}
-
 }  // namespace
 
 RunReport run_case(const Case& c, const RunOptions& options) {
@@ -65,6 +58,18 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   const Model model = build_model(c);
   StaticSolver solver(c, model);
   if (options.progress) solver.set_progress(options.progress);
+  // [start]: the run goes on from the state an earlier run saved at the end of its last step.
+  if (!c.start.empty()) {
+    // Its output directory replaces the states of the run it goes on from: refuse.
+    std::error_code ec;
+    if (std::filesystem::equivalent(options.out_dir, c.start, ec))
+      throw InputError(c.file, "start.from",
+                       fmt::format("\"{}\" is also this run's output directory (its states would be replaced): "
+                                   "give the run another --out directory",
+                                   c.start));
+    solver.restore_state(read_state_file(c.start_state), c.start_state);
+  }
+  const VecX initial = solver.state();
   std::vector<std::string> columns = solver.reaction_columns();
   const std::vector<std::string> contact_columns = {
       "contact:zones",       "contact:elements",   "contact:max_penetration_ratio", "contact:normal_force",
@@ -85,6 +90,8 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   // The expanded case (a [fabric] as its fibers, bodies and tows): `fibra slice` and any later
   // look at the outputs rebuild the model from it.
   write_text_atomic(writer.dir() + "/case.toml", write_case_toml(c));
+  CurvePlotter plotter(c, writer.dir());
+  std::vector<std::string> slice_files;  // relative to the output directory
   std::optional<FabricReport> last_fabric;
   std::string last_fabric_step;
   nlohmann::json fabric_steps = nlohmann::json::array();
@@ -100,8 +107,9 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   for (int e = 0; e < 4 && edges; ++e) edges = (edge[e] = model.body_index(kEdgeBodies[e])) >= 0;
   std::array<Vec3, 4> centre{}, force{}, start{};
   for (int e = 0; e < 4 && edges; ++e) {
-    centre[e] = model.bodies[edge[e]].center;
-    force[e] = Vec3::Zero();
+    const BodyState bs = bodies->state(edge[e], initial);
+    centre[e] = bs.center;
+    force[e] = bs.force;
   }
   int curves_step = -1;
   std::ofstream curves;
@@ -116,13 +124,14 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                           force[1].x(), force[3].y(), angle, force[3].x(), elements, penetration);
     curves.flush();
   };
+  nlohmann::json states = nlohmann::json::array();  // the state files written at step ends
   auto observer = [&](const IncrementInfo& info, const VecX& q) {
     const StepSpec& st = c.steps[info.step_index];
     if (edges && st.is_test() && info.step_index != curves_step) {
       // A new loading step: its curves start from the state at its start.
       curves_step = info.step_index;
       start = centre;
-      const std::string name = "curves_" + file_stem(info.step) + ".csv";
+      const std::string name = "curves_" + step_file_stem(info.step) + ".csv";
       if (curves.is_open()) curves.close();
       curves.open(writer.dir() + "/" + name, std::ios::trunc);
       if (!curves) throw RunError(fmt::format("cannot open for writing '{}/{}'", writer.dir(), name));
@@ -178,10 +187,10 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                               {"max_penetration_ratio", num(rep->max_penetration_ratio)}});
       last_fabric = rep;
       last_fabric_step = info.step;
-      if (kind == StepSpec::Kind::Weave || kind == StepSpec::Kind::Relax) {
+      if (kind == StepSpec::Kind::Weave || kind == StepSpec::Kind::Relax || st.is_test()) {
         // Default slices across the middle of the sample: x half-way between the two middle
         // weft axes (cuts the warps), y likewise (cuts the wefts).
-        const std::string stem = writer.dir() + "/slices/" + file_stem(info.step);
+        const std::string stem = writer.dir() + "/slices/" + step_file_stem(info.step);
         const std::string title = c.title.empty() ? c.name : c.title;
         write_slice(stem + "_x", model, q, c.tows, 0, rep->section_x,
                     fmt::format("{}: step {} ({}), x = {:.4g} mm", title, info.step, StepSpec::kind_name(kind),
@@ -189,7 +198,17 @@ RunReport run_case(const Case& c, const RunOptions& options) {
         write_slice(stem + "_y", model, q, c.tows, 1, rep->section_y,
                     fmt::format("{}: step {} ({}), y = {:.4g} mm", title, info.step, StepSpec::kind_name(kind),
                                 1e3 * rep->section_y));
+        for (const char* name : {"_x.svg", "_x.png", "_y.svg", "_y.png"})
+          slice_files.push_back("slices/" + step_file_stem(info.step) + name);
       }
+    }
+    // The state at each step's end, for runs that go on from it ([start] from = this directory).
+    if (info.step_end) {
+      const std::string name = "state/" + step_file_stem(info.step) + ".bin";
+      std::error_code ec;
+      std::filesystem::create_directories(writer.dir() + "/state", ec);
+      write_state_file(writer.dir() + "/" + name, solver.save_state(info.step, info.step_index + 1));
+      states.push_back({{"step", info.step}, {"file", name}});
     }
     const bool vtu = info.step_end || info.total_increments % c.output.every == 0;
     std::vector<BodyPoint> body_points;
@@ -215,23 +234,26 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     writer.write_increment(q, row, info.step_index + info.load_factor, vtu, solver.has_contact() ? &points : nullptr,
                            bodies ? &body_points : nullptr);
     time_output += std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+    // The plots of a test step once its curves are complete (after its history is written).
+    if (info.step_end && info.step_index == curves_step) plotter.plot(curves_step);
   };
   // Initial (reference) state as increment 0 in the ParaView collection.
   std::vector<BodyPoint> initial_bodies;
   if (bodies)
-    for (Index b = 0; b < bodies->num_bodies(); ++b)
-      initial_bodies.push_back({model.bodies[b].name, model.bodies[b].center, model.bodies[b].axes, Vec3::Zero(),
-                                Vec3::Zero(), Vec3::Zero(), Vec3::Zero(),
-                                bodies->member_positions(b, model.reference)});
+    for (Index b = 0; b < bodies->num_bodies(); ++b) {
+      const BodyState bs = bodies->state(b, initial);
+      initial_bodies.push_back({model.bodies[b].name, bs.center, bs.frame, bs.center - model.bodies[b].center,
+                                bs.rotation, bs.force, bs.moment, bodies->member_positions(b, initial)});
+    }
   std::vector<double> initial_extra(columns.size(), 0.0);
   if (fabric) {
-    const FabricReport rep = fabric_report(c, model, model.reference);
+    const FabricReport rep = fabric_report(c, model, initial);
     const size_t n = initial_extra.size();
     initial_extra[n - 3] = rep.warp_crimp;
     initial_extra[n - 2] = rep.weft_crimp;
     initial_extra[n - 1] = rep.thickness;
   }
-  writer.write_increment(model.reference, HistoryRow{"initial", -1, 0, 0.0, 0, 0.0, 0.0, initial_extra}, 0.0, true,
+  writer.write_increment(initial, HistoryRow{"initial", -1, 0, 0.0, 0, 0.0, 0.0, initial_extra}, 0.0, true,
                          nullptr, bodies ? &initial_bodies : nullptr);
   RunReport report;
   report.result = solver.run(observer);
@@ -243,6 +265,15 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   report.elements = static_cast<Index>(model.elements.size());
   report.fabric = last_fabric;
   writer.write_nodes(solver.state());
+  plotter.plot(curves_step);  // a run stopped within a test step: the plots of what converged
+  report.paraview = {"fibers.pvd", "lines.pvd"};
+  if (solver.has_contact()) report.paraview.push_back("contacts.pvd");
+  if (bodies && bodies->num_bodies() > 0) report.paraview.push_back("bodies.pvd");
+  for (const nlohmann::json& e : curves_files) report.curves.push_back(e["file"].get<std::string>());
+  report.plots = plotter.files();
+  report.plots_error = plotter.error();
+  report.slices = slice_files;
+  for (const nlohmann::json& e : states) report.states.push_back(e["file"].get<std::string>());
   report.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   const SolverStats& s = report.stats;
@@ -260,7 +291,8 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   j["counts"] = {{"fibers", report.fibers}, {"nodes", report.nodes}, {"dofs", report.dofs},
                  {"elements", report.elements}, {"bodies", model.bodies.size()}, {"bindings", c.bindings.size()}};
   j["timings"] = {{"total", report.wall_time}, {"assembly", s.time_assembly},
-                  {"factorization", s.time_factorization}, {"solve", s.time_solve}, {"output", time_output}};
+                  {"factorization", s.time_factorization}, {"solve", s.time_solve}, {"output", time_output},
+                  {"plots", plotter.time()}};
   if (fabric) {
     j["timings"]["fabric_report"] = time_fabric;
     if (last_fabric) {
@@ -271,7 +303,12 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     }
     j["fabric_steps"] = fabric_steps;
   }
-  if (!curves_files.empty()) j["curves"] = curves_files;
+  if (!curves_files.empty()) {
+    j["curves"] = curves_files;
+    plotter.add_to_summary(j);
+  }
+  if (!c.start.empty()) j["start"] = {{"from", c.start}, {"step", c.start_step}, {"file", c.start_state}};
+  j["states"] = states;
   j["solver"] = {{"linear_solver", c.solver.linear_solver},
                  {"ordering", c.solver.ordering},
                  {"threads", omp_get_max_threads()},

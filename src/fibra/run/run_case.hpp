@@ -3,6 +3,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "fibra/model/case.hpp"
 #include "fibra/model/fabric_report.hpp"
@@ -25,14 +26,26 @@ struct RunReport {
   double wall_time = 0;  ///< [s]
   VecX final_state;      ///< nodal values at the last converged increment
   std::optional<FabricReport> fabric;  ///< with tows: the report at the end of the last completed step
+  // Files written, relative to the output directory (for the list a run prints at its end).
+  std::vector<std::string> paraview;  ///< the .pvd collections (fibers, lines, contacts, bodies)
+  std::vector<std::string> curves;    ///< curves_STEP.csv of the biaxial and shear steps
+  std::vector<std::string> plots;     ///< plots/STEP.png, .svg, .json of those steps
+  std::vector<std::string> states;    ///< state/STEP.bin at the end of each step (for [start])
+  std::vector<std::string> slices;    ///< slices/STEP_x.svg, .png, STEP_y.svg, .png
+  /// Why plots are missing (Python, matplotlib or the script failed) and how to draw them
+  /// later; empty when every plot was drawn (or [output] plots = false).
+  std::string plots_error;
 };
 
 /// Builds the model of `c`, solves every step, writes case.toml (the expanded case, at the
 /// start), history.csv, fibers.pvd/.vtu, nodes.csv and summary.json into options.out_dir; with
 /// tows also the fabric report (summary.json "fabric", "fabric_steps", history columns
-/// fabric:*) and, at the end of every weave and relax step, slices/STEP_x and STEP_y (.svg,
-/// .png) across the middle of the sample. Throws InputError for invalid input; a
-/// non-converged run returns normally with result.status != Converged (outputs kept).
+/// fabric:*) and, at the end of every weave, relax, biaxial and shear step, slices/STEP_x and
+/// STEP_y (.svg, .png) across the middle of the sample; for biaxial and shear steps
+/// curves_STEP.csv and, when the step ends (or the run stops within it), plots/STEP.png, .svg,
+/// .json (CurvePlotter; a failure to draw is reported in plots_error, not thrown). Throws
+/// InputError for invalid input; a non-converged run returns normally with result.status !=
+/// Converged (outputs kept).
 RunReport run_case(const Case& c, const RunOptions& options);
 
 }  // namespace fibra

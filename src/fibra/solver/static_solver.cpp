@@ -585,6 +585,52 @@ void StaticSolver::test_conditions(int step, std::map<Index, std::pair<double, d
   }
 }
 
+SolverState StaticSolver::save_state(const std::string& step, int steps_done) const {
+  SolverState s;
+  s.model = fingerprint(m_model, m_bodies ? m_bodies->num_bindings() : 0);
+  s.reference = m_model.reference;
+  s.step = step;
+  s.steps_done = steps_done;
+  s.q = m_q;
+  if (m_bodies) s.bodies = m_bodies->snapshot();
+  if (m_contact) s.contacts = m_problem->contacts();
+  s.force_end = m_program->force_end;
+  s.moments = m_program->moments;
+  s.disp = m_program->disp;
+  return s;
+}
+
+void StaticSolver::restore_state(const SolverState& s, const std::string& file) {
+  const ModelFingerprint here = fingerprint(m_model, m_bodies ? m_bodies->num_bindings() : 0);
+  if (!(s.model == here))
+    throw InputError(file, "(file)",
+                     fmt::format("the state belongs to another model ({} dofs, {} elements, {} bodies, {} bindings; "
+                                 "this case has {}, {}, {}, {})",
+                                 s.model.dofs, s.model.elements, s.model.bodies, s.model.bindings, here.dofs,
+                                 here.elements, here.bodies, here.bindings));
+  const double moved = (s.reference - m_model.reference).cwiseAbs().maxCoeff();
+  if (moved > 1e-9 * m_model.length_scale)
+    throw InputError(file, "(file)",
+                     fmt::format("the state belongs to another model: its reference configuration differs by {:.3e} m",
+                                 moved));
+  for (const auto& [dof, d] : s.disp)
+    if (dof < 0 || dof >= here.dofs) throw InputError(file, "(file)", "a prescribed dof out of range: corrupt");
+  for (const auto& [node, m] : s.moments)
+    if (node < 0 || node >= m_model.num_nodes()) throw InputError(file, "(file)", "a moment's node out of range: corrupt");
+  m_q = s.q;
+  if (m_bodies) {
+    try {
+      m_bodies->restore(s.bodies);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(file, "(file)", fmt::format("corrupt: {}", e.what()));
+    }
+  }
+  if (m_contact && m_problem->set_contacts(s.contacts, m_contact->friction())) m_linear->analyze(m_problem->pattern());
+  m_program->force_start = m_program->force_end = s.force_end;
+  m_program->moments = s.moments;
+  m_program->disp = s.disp;
+}
+
 RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const VecX&)>& observer) {
   const auto t_start = std::chrono::steady_clock::now();
   RunResult result;

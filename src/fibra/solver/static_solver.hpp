@@ -14,6 +14,7 @@
 #include "fibra/solver/krylov.hpp"
 #include "fibra/solver/linear_solver.hpp"
 #include "fibra/solver/problem.hpp"
+#include "fibra/solver/solver_state.hpp"
 
 namespace fibra {
 
@@ -91,6 +92,12 @@ class StaticSolver {
   const SolverStats& stats() const { return m_stats; }             ///< counters and timings
   const std::vector<std::string>& reaction_columns() const { return m_reaction_columns; }  ///< names
   Problem& problem() { return *m_problem; }                        ///< the assembled problem
+  /// The state after the last converged increment, for state.bin (solver_state.hpp): call it
+  /// at a step's end (from the observer of the step's last increment).
+  SolverState save_state(const std::string& step, int steps_done) const;
+  /// Starts the run from a saved state instead of the reference configuration (before run()).
+  /// Throws InputError naming `file` when the state belongs to another model.
+  void restore_state(const SolverState& state, const std::string& file);
   /// Progress callback (one line per increment); default none.
   void set_progress(std::function<void(const std::string&)> progress) { m_progress = std::move(progress); }
 

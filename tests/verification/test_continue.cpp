@@ -1,0 +1,245 @@
+// Runs that go on from an earlier run's state ([start] from = DIR): weaving once and testing
+// the woven sample many times must give what one run doing it all gives; and the state files
+// refuse the wrong model, a truncated file and a step that did not end.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "fibra/core/error.hpp"
+#include "fibra/io/case_reader.hpp"
+#include "fibra/io/case_writer.hpp"
+#include "fibra/model/model.hpp"
+#include "fibra/run/run_case.hpp"
+#include "fibra/solver/solver_state.hpp"
+#include "support/example_files.hpp"
+#include "support/fabric_cases.hpp"
+
+namespace fibra {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<std::vector<double>> read_curves(const fs::path& file) {
+  std::ifstream in(file);
+  std::string line;
+  std::getline(in, line);  // header
+  std::vector<std::vector<double>> rows;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    std::vector<double> row;
+    std::stringstream ss(line);
+    std::string field;
+    std::getline(ss, field, ',');  // step name
+    while (std::getline(ss, field, ',')) row.push_back(std::stod(field));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+nlohmann::json read_json(const fs::path& file) {
+  std::ifstream in(file);
+  return nlohmann::json::parse(in);
+}
+
+class Continue : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    s_dir = fs::temp_directory_path() / ("fibra_continue_" + std::to_string(static_cast<long>(::getpid())));
+    fs::remove_all(s_dir);
+    fs::create_directories(s_dir);
+    // Woven, relaxed and pulled in one run (its states at the end of each step are kept).
+    const Case c = parse_case_toml(test::plain_friction_sample(kPull), (s_dir / "fabric.toml").string());
+    RunOptions options;
+    options.out_dir = (s_dir / "whole").string();
+    s_whole = run_case(c, options).result.status == RunResult::Status::Converged;
+  }
+  static void TearDownTestSuite() {
+    std::error_code ec;
+    fs::remove_all(s_dir, ec);
+  }
+  static Case continued(const std::string& start, const std::string& steps) {
+    return parse_case_toml("[start]\n" + start + "\n" + steps, (s_dir / "continued.toml").string());
+  }
+
+  static constexpr const char* kPull = "[[step]]\nname = \"pull\"\nkind = \"biaxial\"\nstrain = 0.004\nincrements = 2\n";
+  static inline fs::path s_dir;
+  static inline bool s_whole = false;
+};
+
+TEST_F(Continue, TestingFromTheRelaxedStateRepeatsTheWholeRun) {
+  ASSERT_TRUE(s_whole);
+  const fs::path whole = s_dir / "whole";
+  for (const char* step : {"weave", "relax", "pull"}) EXPECT_TRUE(fs::is_regular_file(whole / "state" / (std::string(step) + ".bin")));
+  const nlohmann::json summary = read_json(whole / "summary.json");
+  ASSERT_EQ(summary["states"].size(), 3u);
+  EXPECT_EQ(summary["states"][1]["step"], "relax");
+  EXPECT_EQ(summary["states"][1]["file"], "state/relax.bin");
+
+  const Case c = continued("from = \"whole\"\nstep = \"relax\"", kPull);
+  EXPECT_EQ(c.start_step, "relax");
+  EXPECT_EQ(c.steps.size(), 1u);
+  RunOptions options;
+  options.out_dir = (s_dir / "pull").string();
+  const RunReport r = run_case(c, options);
+  ASSERT_EQ(r.result.status, RunResult::Status::Converged) << r.result.message;
+  // The same curve: rows (increment, load, strains, forces, shear, contact elements,
+  // penetration) equal to the solver's tolerance.
+  const auto a = read_curves(whole / "curves_pull.csv"), b = read_curves(s_dir / "pull" / "curves_pull.csv");
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_EQ(a.size(), 3u);
+  for (size_t k = 0; k < a.size(); ++k) {
+    ASSERT_EQ(a[k].size(), b[k].size());
+    for (size_t i = 0; i < a[k].size(); ++i) {
+      if (std::isnan(a[k][i])) {
+        EXPECT_TRUE(std::isnan(b[k][i]));
+        continue;
+      }
+      EXPECT_NEAR(b[k][i], a[k][i], 1e-6 * std::max(1.0, std::abs(a[k][i]))) << "row " << k << " column " << i;
+    }
+  }
+  // The start row carries the relaxed tension (not zero: the edges hold the fabric).
+  EXPECT_GT(b[0][4], 1.0);  // warp force [N]
+  const nlohmann::json s = read_json(s_dir / "pull" / "summary.json");
+  EXPECT_EQ(s["start"]["step"], "relax");
+  EXPECT_EQ(s["states"].size(), 1u);
+  EXPECT_EQ(s["states"][0]["step"], "pull");
+}
+
+TEST_F(Continue, WithoutAStepTheLastOneThatEnded) {
+  ASSERT_TRUE(s_whole);
+  EXPECT_EQ(continued("from = \"whole\"", kPull).start_step, "pull");
+}
+
+TEST_F(Continue, BadStartsAreNamed) {
+  ASSERT_TRUE(s_whole);
+  auto error = [&](const std::string& start, const std::string& text = kPull) {
+    try {
+      continued(start, text);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error("from = \"nowhere\"").find("start.from: no result directory"), std::string::npos);
+  EXPECT_NE(error("from = \"whole\"\nstep = \"relx\"").find("start.step: the run in"), std::string::npos);
+  EXPECT_NE(error("from = \"whole\"\nstep = \"relx\"").find("did you mean \"relax\""), std::string::npos);
+  EXPECT_NE(error("from = \"whole\"\nfrom_step = 1").find("start.from_step"), std::string::npos);
+  EXPECT_NE(error("from = \"whole\"", "[fabric]\npattern = \"plain\"\n" + std::string(kPull)).find("fabric: a case with [start]"),
+            std::string::npos);
+  // A step whose state is missing (a run stopped within it).
+  fs::copy(s_dir / "whole", s_dir / "partial", fs::copy_options::recursive | fs::copy_options::overwrite_existing);
+  fs::remove(s_dir / "partial" / "state" / "pull.bin");
+  EXPECT_NE(error("from = \"partial\"\nstep = \"pull\"").find("did not end its step \"pull\""), std::string::npos);
+  EXPECT_EQ(continued("from = \"partial\"", kPull).start_step, "relax");
+}
+
+TEST_F(Continue, StateFilesRefuseOtherModelsAndDamage) {
+  ASSERT_TRUE(s_whole);
+  const fs::path file = s_dir / "whole" / "state" / "relax.bin";
+  const SolverState s = read_state_file(file.string());
+  EXPECT_EQ(s.step, "relax");
+  EXPECT_EQ(s.steps_done, 2);
+  EXPECT_GT(s.contacts.size(), 0u);
+  // Written back, read again: the same values.
+  const fs::path copy = s_dir / "copy.bin";
+  write_state_file(copy.string(), s);
+  const SolverState t = read_state_file(copy.string());
+  EXPECT_EQ(t.q, s.q);
+  EXPECT_EQ(t.bodies, s.bodies);
+  ASSERT_EQ(t.contacts.size(), s.contacts.size());
+  EXPECT_EQ(t.contacts.back().friction_previous, s.contacts.back().friction_previous);
+  EXPECT_EQ(t.disp, s.disp);
+  // Truncated.
+  const auto size = fs::file_size(copy);
+  fs::resize_file(copy, size / 2);
+  try {
+    read_state_file(copy.string());
+    ADD_FAILURE() << "a truncated state was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("ends early"), std::string::npos) << e.what();
+  }
+  // Not a state file.
+  std::ofstream(copy) << "title = \"x\"\n";
+  EXPECT_THROW(read_state_file(copy.string()), InputError);
+  // Another model: the same fabric with one more fiber per tow.
+  const Case other = parse_case_toml(test::glass_fabric("plain", 2, 4, 5.0e-5, 1.25e-4, "tension = 0.5\n",
+                                                        "[contact]\n[[step]]\nname = \"relax\"\nkind = \"relax\"\n"),
+                                     (s_dir / "other.toml").string());
+  const Model model = build_model(other);
+  StaticSolver solver(other, model);
+  try {
+    solver.restore_state(s, file.string());
+    ADD_FAILURE() << "a state of another model was restored";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("belongs to another model"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(Continue, OutputIntoItsOwnStartIsRefused) {
+  ASSERT_TRUE(s_whole);
+  const Case c = continued("from = \"whole\"\nstep = \"relax\"", kPull);
+  RunOptions options;
+  options.out_dir = (s_dir / "whole").string();
+  EXPECT_THROW(run_case(c, options), InputError);
+  EXPECT_TRUE(fs::is_regular_file(s_dir / "whole" / "state" / "relax.bin"));
+}
+
+// The paper's tests (examples/durville2010/*_biaxial*.toml, *_shear.toml) go on from the run of
+// plain.toml or twill.toml (480 fibers, too long for the suite): each is read here against a
+// stand-in result directory of its base case, holding that case as run and a state at the
+// reference configuration (same model), so that their keys, steps and edge bodies are checked.
+TEST(ContinueExamples, PaperTestsReadAgainstTheirBase) {
+  const fs::path examples = fs::path(FIBRA_SOURCE_DIR) / "examples" / "durville2010";
+  const fs::path tmp = fs::temp_directory_path() / ("fibra_continue_examples_" + std::to_string(static_cast<long>(::getpid())));
+  fs::remove_all(tmp);
+  int read = 0;
+  for (const char* base : {"plain", "twill"}) {
+    const Case c = read_case((examples / (std::string(base) + ".toml")).string());
+    const Model model = build_model(c);
+    const fs::path dir = tmp / base;
+    fs::create_directories(dir / "state");
+    std::ofstream(dir / "case.toml") << write_case_toml(c);
+    const Case as_run = read_case((dir / "case.toml").string());
+    const Model same = build_model(as_run);
+    StaticSolver solver(as_run, same);
+    write_state_file((dir / "state" / "relax.bin").string(), solver.save_state("relax", 2));
+    for (const char* test : {"_biaxial", "_biaxial_half", "_shear"}) {
+      const fs::path file = examples / (std::string(base) + test + ".toml");
+      std::ifstream in(file);
+      std::stringstream text;
+      text << in.rdbuf();
+      const std::string original = text.str();
+      // Its [start] from, pointed at the stand-in.
+      const std::string from = "from = \"../../out/durville2010_" + std::string(base) + "\"";
+      const size_t at = original.find(from);
+      ASSERT_NE(at, std::string::npos) << file << " does not go on from out/durville2010_" << base;
+      const std::string edited =
+          original.substr(0, at) + "from = \"" + dir.string() + "\"" + original.substr(at + from.size());
+      const Case t = parse_case_toml(edited, file.string());
+      EXPECT_EQ(t.start_step, "relax") << file;
+      ASSERT_EQ(t.steps.size(), 1u) << file;
+      EXPECT_TRUE(t.steps[0].is_test()) << file;
+      EXPECT_EQ(build_model(t).num_dofs(), model.num_dofs()) << file;
+      ++read;
+    }
+  }
+  EXPECT_EQ(read, 6);
+  // Every example that goes on from an earlier run is one of those read here.
+  int continued = 0;
+  for (const fs::directory_entry& dir : fs::directory_iterator(fs::path(FIBRA_SOURCE_DIR) / "examples"))
+    if (dir.is_directory())
+      for (const fs::directory_entry& f : fs::directory_iterator(dir.path()))
+        continued += f.path().extension() == ".toml" && test::goes_on_from_an_earlier_run(f.path());
+  EXPECT_EQ(continued, read);
+  fs::remove_all(tmp);
+}
+
+}  // namespace
+}  // namespace fibra
