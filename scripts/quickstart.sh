@@ -5,4 +5,4 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/deps.sh"
 bash "$root/scripts/build.sh"
 cd "$root"
-"${FIBRA_BUILD_DIR:-$root/build}/fibra" run examples/cantilever/cantilever.toml --out out/cantilever
+"${FIBRA_BUILD_DIR:-$root/build}/fibra" run examples/woven_sample/woven_sample.toml --out out/woven_sample

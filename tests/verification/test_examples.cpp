@@ -1,11 +1,17 @@
 // Every example case (examples/*/*.toml, found by globbing so that new examples are covered
-// automatically) runs to convergence through run_case and writes its outputs.
+// automatically) runs to convergence through run_case and writes its outputs. A woven example
+// is crimped at the end of each weave and relax step, and each of its test curves
+// (curves_STEP.csv) ends at the strain or angle its step prescribes, a biaxial pull's forces
+// growing from level to level.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <unistd.h>
 #include <vector>
@@ -29,6 +35,70 @@ TEST(Examples, ThereAreExamples) {
   EXPECT_NE(std::find(cases.begin(), cases.end(),
                       fs::path(FIBRA_SOURCE_DIR) / "examples" / "cantilever" / "cantilever.toml"),
             cases.end());
+  // The default example (scripts/quickstart.sh): woven, then pulled.
+  EXPECT_NE(std::find(cases.begin(), cases.end(),
+                      fs::path(FIBRA_SOURCE_DIR) / "examples" / "woven_sample" / "woven_sample.toml"),
+            cases.end());
+}
+
+// The columns of a CSV file with one header line: name -> values ("nan" reads as NaN).
+std::map<std::string, std::vector<double>> read_columns(const fs::path& file) {
+  std::map<std::string, std::vector<double>> out;
+  std::ifstream in(file);
+  std::string line, cell;
+  std::vector<std::string> names;
+  if (std::getline(in, line)) {
+    std::istringstream header(line);
+    while (std::getline(header, cell, ',')) names.push_back(cell);
+  }
+  while (std::getline(in, line)) {
+    std::istringstream row(line);
+    for (size_t k = 0; k < names.size() && std::getline(row, cell, ','); ++k) {
+      try {
+        out[names[k]].push_back(std::stod(cell));
+      } catch (const std::exception&) {
+        out[names[k]].push_back(std::numeric_limits<double>::quiet_NaN());  // a text column (the step)
+      }
+    }
+  }
+  return out;
+}
+
+// The checks of a woven example's summary: crimped after weaving and relaxing, crossings
+// resolved; each test curve ends where its step says, biaxial forces growing at every level.
+void expect_woven_results(const fs::path& file, const fs::path& dir, const nlohmann::json& summary) {
+  for (const nlohmann::json& st : summary.value("fabric_steps", nlohmann::json::array())) {
+    const std::string kind = st.value("kind", "");
+    if (kind != "weave" && kind != "relax") continue;
+    EXPECT_GT(st.value("warp_crimp", 0.0), 0.0) << file << ": step " << st.value("step", "");
+    EXPECT_GT(st.value("weft_crimp", 0.0), 0.0) << file << ": step " << st.value("step", "");
+    EXPECT_LT(st.value("max_penetration_ratio", 1.0), 0.1) << file << ": step " << st.value("step", "");
+  }
+  for (const nlohmann::json& curve : summary.value("curves", nlohmann::json::array())) {
+    const fs::path csv = dir / curve.value("file", "");
+    ASSERT_TRUE(fs::is_regular_file(csv)) << file << ": no " << csv.filename();
+    const auto col = read_columns(csv);
+    const std::vector<double>& warp_strain = col.at("warp_strain");
+    ASSERT_GE(warp_strain.size(), 2u) << csv;  // the step's start and at least one level
+    EXPECT_EQ(warp_strain.front(), 0.0) << csv;
+    if (curve.value("kind", "") == "biaxial") {
+      const double strain = curve.value("strain", 0.0), ratio = curve.value("ratio", 0.0);
+      EXPECT_NEAR(warp_strain.back(), strain, 1e-9) << csv;
+      if (ratio > 0) {
+        EXPECT_NEAR(col.at("weft_strain").back(), ratio * strain, 1e-9) << csv;
+      }
+      const std::vector<double>& warp = col.at("warp_force");
+      const std::vector<double>& weft = col.at("weft_force");
+      for (size_t k = 1; k < warp.size(); ++k) {
+        EXPECT_GT(warp[k] * strain, warp[k - 1] * strain) << csv << ": row " << k;  // grows with the pull's sense
+        if (ratio > 0) {
+          EXPECT_GT(weft[k] * strain, weft[k - 1] * strain) << csv << ": row " << k;
+        }
+      }
+    } else if (curve.value("kind", "") == "shear") {
+      EXPECT_NEAR(col.at("shear_angle_deg").back(), curve.value("angle", 0.0), 1e-6) << csv;
+    }
+  }
 }
 
 class Example : public ::testing::TestWithParam<fs::path> {};
@@ -59,6 +129,7 @@ TEST_P(Example, RunsToConvergenceAndWritesItsOutputs) {
   ASSERT_FALSE(summary.is_discarded()) << file << ": summary.json does not parse";
   EXPECT_EQ(summary.value("status", ""), "converged") << file;
   EXPECT_TRUE(report.final_state.allFinite()) << file;
+  if (c.fabric || !c.tows.empty()) expect_woven_results(file, dir, summary);
   std::printf("%s: %d increments, %d iterations, %.2f s\n", file.filename().c_str(), report.stats.increments,
               report.stats.iterations, report.wall_time);
   fs::remove_all(dir, ec);

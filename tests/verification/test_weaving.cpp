@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include "fibra/model/fabric.hpp"
 #include "fibra/model/fabric_report.hpp"
@@ -248,6 +249,66 @@ TEST(FabricTests, UniaxialLeavesTheWeftFree) {
   EXPECT_GT(end.bodies[e.xp].force.x(), 2.0 * start.bodies[e.xp].force.x());
   EXPECT_LT(weft, 0.0);
   EXPECT_GT(weft, -0.004);
+}
+
+// The J-shaped tensile curve of a woven sample. The warp of a woven fabric is crimped: pulled,
+// it first straightens, which it can only do by pushing the weft's crossings further apart
+// (crimp interchange), against the weft's bending; once straight, it must stretch its fibers,
+// n E A per unit strain. So the tangent dF/d(strain) starts well below n E A and rises to it.
+// Here: the uniaxial pull (ratio 0: the weft free along y under its weaving tension, 0.01 N
+// per fiber) of a 2 x 2 plain weave of three-fiber tows with 3 mm of free tow beyond the
+// crossings, 0.6 % in six load levels. Measured: tangent 920 N over the first level
+// (0.27 n E A), 3 305 N over the last (0.97 n E A), ratio 3.6; warp crimp 0.53 % -> 0.08 %,
+// weft crimp 0.53 % -> 1.43 %.
+// Why the long free tows: in tows one fiber thick the crimp amplitude h is about r, and a
+// sine-shaped warp straightens against the weft's bending with a stiffness 4 E I r / h^3 = E A
+// at the start, so the tangent starts near E A / 2 and can at most double. With the friction
+// sample's free ends (half a spacing) and the same tension the uniaxial tangent goes from 1 718
+// to 2 644 N over 1 % in ten levels (ratio 1.5); equibiaxial pulls (the weft pulled too: no
+// crimp interchange) are nearly straight (3 257 -> 3 496 N over 1 % in four levels, the fibers'
+// own stiffening). With 3 mm free the weft's crossings move apart by bending the long ends, and
+// the straightening stiffness falls from about n E A to 0.37 n E A. Tows several fibers thick
+// (the 480-fiber sample's) would give the J in the fabric itself.
+TEST(FabricTests, BiaxialCurveIsJShaped) {
+  const test::Solved s = test::solve_toml(
+      test::long_tow_sample(
+          "[[step]]\nname = \"pull\"\nkind = \"biaxial\"\nstrain = 0.006\nratio = 0\nincrements = 6\n"),
+      "j_shape.toml");
+  ASSERT_TRUE(s.converged()) << s.result.message;
+  ASSERT_EQ(s.step_end_info.size(), 3u);
+  const Edges e = edges_of(s);
+  const IncrementInfo& start = s.step_end_info[1];
+  auto lx = [&](const IncrementInfo& i) { return i.bodies[e.xp].center.x() - i.bodies[e.xm].center.x(); };
+  // The curve: the step's start, then one point per load level (its settled increment).
+  std::vector<double> strain{0.0}, force{start.bodies[e.xp].force.x()};
+  for (const IncrementInfo& i : s.increments) {
+    if (i.step != "pull" || !i.settled) continue;
+    strain.push_back(lx(i) / lx(start) - 1.0);
+    force.push_back(i.bodies[e.xp].force.x());
+    EXPECT_NEAR(i.bodies[e.yp].force.y(), 0.06, 1e-3 * 0.06);  // the weft keeps its tension
+  }
+  ASSERT_EQ(strain.size(), 7u);
+  EXPECT_NEAR(strain.back(), 0.006, 1e-9);
+  std::vector<double> tangent;
+  for (size_t k = 1; k < strain.size(); ++k) tangent.push_back((force[k] - force[k - 1]) / (strain[k] - strain[k - 1]));
+  const double r = 5e-5;
+  const double n_ea = 6 * 72e9 * std::numbers::pi * r * r;  // the straight warp: 6 fibers
+  std::printf("J-shape: n E A = %.4g N; warp force", n_ea);
+  for (double f : force) std::printf(" %.4g", f);
+  std::printf(" N; tangents");
+  for (double k : tangent) std::printf(" %.4g", k);
+  std::printf(" N; last / first %.3f\n", tangent.back() / tangent.front());
+  EXPECT_LT(tangent.front(), 0.4 * n_ea);  // straightening, not stretching
+  EXPECT_GT(tangent.back(), 0.85 * n_ea);  // stretching the straightened fibers
+  EXPECT_GE(tangent.back() / tangent.front(), 3.0);
+  for (size_t k = 1; k < tangent.size(); ++k) EXPECT_GT(tangent[k], tangent[k - 1]) << "level " << k + 1;
+  // The warp straightened and the weft took its crimp.
+  const FabricReport relaxed = fabric_report(s.c, s.model, s.step_end_states[1], nullptr, nullptr);
+  const FabricReport pulled = fabric_report(s.c, s.model, s.q, nullptr, nullptr);
+  std::printf("crimp warp %.5f -> %.5f, weft %.5f -> %.5f\n", relaxed.warp_crimp, pulled.warp_crimp, relaxed.weft_crimp,
+              pulled.weft_crimp);
+  EXPECT_LT(pulled.warp_crimp, 0.25 * relaxed.warp_crimp);
+  EXPECT_GT(pulled.weft_crimp, 2.0 * relaxed.weft_crimp);
 }
 
 // Shear to +4 and -4 degrees: the top (y+) and bottom (y-) edges move in opposite senses along
