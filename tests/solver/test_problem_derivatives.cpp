@@ -207,6 +207,70 @@ TEST(ProblemDerivatives, GradientAndHessianMatchFiniteDifferencesWithFixedDofs) 
   }
 }
 
+// The drag of weave, relax and test steps (Problem::set_drag): the term on its own, (with drag)
+// - (without), against finite differences, isotropic and with a weak drag along the fiber; and
+// its energy for a motion along the fiber's tangent and across it, against the formula.
+TEST(ProblemDerivatives, DragAlongAndAcrossTheFiberMatchesFiniteDifferences) {
+  const Case c = parse_case_toml(kCase, "problem.toml");
+  const Model model = build_model(c);
+  Problem p(model);
+  std::mt19937 rng(7);
+  const double h = fd_step(1.0);
+  const double stiffness = 3.0e4, director = 100.0;
+  for (const double axial : {1.0, 0.01}) {
+    const VecX anchor = random_state(model, rng);
+    const VecX q = random_state(model, rng);
+    const Loaded l = random_loads(model, rng, 0.0, 0.0);
+    apply(p, l, false);
+    auto drag_energy = [&](const VecX& x) {
+      p.set_drag(stiffness, anchor, director, axial);
+      const double a = p.evaluate(x, nullptr, nullptr);
+      p.set_drag(0.0, anchor);
+      return a - p.evaluate(x, nullptr, nullptr);
+    };
+    auto drag_gradient = [&](const VecX& x) {
+      VecX a, b;
+      p.set_drag(stiffness, anchor, director, axial);
+      p.evaluate(x, &a, nullptr);
+      p.set_drag(0.0, anchor);
+      p.evaluate(x, &b, nullptr);
+      return VecX(a - b);
+    };
+    VecX g1, g0;
+    std::vector<double> h1, h0;
+    p.set_drag(stiffness, anchor, director, axial);
+    p.evaluate(q, &g1, &h1);
+    p.set_drag(0.0, anchor);
+    p.evaluate(q, &g0, &h0);
+    const VecX gd = g1 - g0;
+    EXPECT_LT(rel_error(gd, fd_gradient(drag_energy, q, h)), 1e-6) << "axial weight " << axial;
+    std::vector<Index> free;
+    for (Index d = 0; d < q.size(); ++d)
+      if (!l.fixed[d]) free.push_back(d);
+    const Eigen::MatrixXd hd = (dense(p.pattern(), h1) - dense(p.pattern(), h0))(free, free);
+    const Eigen::MatrixXd hd_fd = fd_jacobian(drag_gradient, q, h)(free, free);
+    EXPECT_LT(rel_error(hd, hd_fd), 1e-6) << "axial weight " << axial;
+    // The gradient is the drag's force: zero at the anchor.
+    EXPECT_EQ(drag_gradient(anchor).norm(), 0.0);
+
+    // Node 3 moved along the anchor's tangent there (from its neighbours), then across it.
+    const Index node = 3;
+    const Vec3 t = (anchor.segment<3>(9 * (node + 1)) - anchor.segment<3>(9 * (node - 1))).normalized();
+    const Vec3 n = t.unitOrthogonal();
+    for (const auto& [dir, weight] : {std::pair{t, axial}, std::pair{n, 1.0}}) {
+      VecX x = anchor;
+      x.segment<3>(9 * node) += 1e-2 * dir;
+      // (The energy is a difference of two evaluations with the beam's energy in both.)
+      const double expected = 0.5 * stiffness * weight * 1e-4;
+      EXPECT_NEAR(drag_energy(x), expected, 1e-6 * expected) << "axial weight " << axial;
+      const Vec3 force = drag_gradient(x).segment<3>(9 * node);
+      EXPECT_LT((force - stiffness * weight * 1e-2 * dir).norm(), 1e-6 * stiffness * weight * 1e-2);
+      p.set_drag(stiffness, anchor, director, axial);
+      EXPECT_LT((p.drag_projected(node, 1e-3 * dir) - weight * 1e-3 * dir).norm(), 1e-15);
+    }
+  }
+}
+
 TEST(MomentLoad, DerivativeMatchesFiniteDifferencesAndIsSymmetric) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

@@ -138,7 +138,10 @@ TEST(Weaving, PlainAndTwillFromTheSameTowsDiffer) {
 const std::string kPlainFriction = test::plain_friction_sample();
 
 TEST(Weaving, PlainWeaveWithFrictionRelaxesToEquilibrium) {
-  const test::Solved s = test::solve_toml(kPlainFriction, "plain_friction.toml");
+  // This test holds the relaxed state to 1e-6 (the default relax_tolerance is 1e-4).
+  std::string text = kPlainFriction;
+  text.replace(text.find("[contact]"), 9, "[solver]\nrelax_tolerance = 1e-6\n[contact]");
+  const test::Solved s = test::solve_toml(text, "plain_friction.toml");
   ASSERT_TRUE(s.converged()) << s.result.message;
   ASSERT_EQ(s.step_end_info.size(), 2u);
   const IncrementInfo& woven = s.step_end_info[0];
@@ -161,7 +164,12 @@ TEST(Weaving, PlainWeaveWithFrictionRelaxesToEquilibrium) {
   std::printf("relaxed: edge forces sum to (%.3e, %.3e, %.3e) N; at the end of the weave step (%.3e, %.3e, %.3e) N\n",
               balance.x(), balance.y(), balance.z(), edge_sum(woven).x(), edge_sum(woven).y(), edge_sum(woven).z());
   EXPECT_LT(balance.norm(), 1e-5 * pull);
-  EXPECT_GT(edge_sum(woven).norm(), pull);  // the drag carried the weave step's forces
+  // At the end of the weave step the drag still carries part of the edge forces, but less than
+  // the pull: the fibers slide along themselves against a weak drag (drag_axial) and the edges
+  // draw in as the tows crimp. With an isotropic drag the weave stretched the tows instead and
+  // the drag carried more than the pull (4.2 N here; 178 N against 12 N on the 480-fiber sample).
+  EXPECT_GT(edge_sum(woven).norm(), 1e-3 * pull);
+  EXPECT_LT(edge_sum(woven).norm(), pull);
 
   // Pattern order at every crossing, at the relaxed state.
   EXPECT_EQ(expect_pattern_order(s, 5e-5), 4);  // separated by more than r
@@ -333,11 +341,13 @@ TEST(FabricTests, ShearReversedNearlyMirrors) {
     EXPECT_NEAR(std::atan2(offset, height) * 180.0 / std::numbers::pi, angle, 1e-9);
     EXPECT_NEAR(end.bodies[e.yp].center.y() - end.bodies[e.ym].center.y(), height, 1e-12);
     // Lateral edges turned about the normal only, as the lines across the shear do (from +y
-    // towards +x for a positive angle: a negative rotation about z), by less than the angle
-    // (measured 3.0 degrees for 4).
+    // towards +x for a positive angle: a negative rotation about z), by about the angle, as in
+    // a homogeneous simple shear (measured 4.03 degrees for 4; 3.0 before the weak drag along
+    // the fibers, when the weave left the tows stretched).
     const Vec3 r = end.bodies[e.xp].rotation - start.bodies[e.xp].rotation;
     EXPECT_LT(r.z() * angle, 0.0);
-    EXPECT_LT(std::abs(r.z()), std::abs(angle) * std::numbers::pi / 180.0);
+    EXPECT_GT(std::abs(r.z()), 0.5 * std::abs(angle) * std::numbers::pi / 180.0);
+    EXPECT_LT(std::abs(r.z()), 1.25 * std::abs(angle) * std::numbers::pi / 180.0);
     EXPECT_LT(std::abs(r.x()) + std::abs(r.y()), 1e-12);
     EXPECT_LT(edge_force_sum(end, e).norm(), 1e-3 * std::abs(end.bodies[e.yp].force.y()));
     added[k] = end.bodies[e.yp].force.x() - start.bodies[e.yp].force.x();

@@ -1578,7 +1578,7 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   check_keys(t, path,
              {"residual_tolerance", "displacement_tolerance", "max_iterations", "max_cuts",
               "line_search", "linear_solver", "ordering", "binding_tolerance", "max_binding_updates",
-              "binding_stiffness", "max_step", "weave_drag", "relax_drag", "relax_tolerance", "test_tolerance", "krylov_iterations",
+              "binding_stiffness", "max_step", "weave_drag", "relax_drag", "drag_axial", "relax_tolerance", "test_tolerance", "krylov_iterations",
               "krylov_tolerance"});
   SolverSpec s;
   if (const Value* v = find(t, "residual_tolerance")) {
@@ -1634,6 +1634,12 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
       if (!(x >= 0)) fail(key, fmt::format("expected a number >= 0 (relative to the contact penalty), got {}", x), v);
       (std::string(name) == "weave_drag" ? s.weave_drag : s.relax_drag) = x;
     }
+  }
+  if (const Value* v = find(t, "drag_axial")) {
+    const std::string key = join(path, "drag_axial");
+    s.drag_axial = to_number(*v, key);
+    if (!(s.drag_axial > 0 && s.drag_axial <= 1))
+      fail(key, fmt::format("expected a number in (0, 1] (the drag along a fiber relative to across it), got {}", s.drag_axial), v);
   }
   if (const Value* v = find(t, "test_tolerance")) {
     const std::string key = join(path, "test_tolerance");

@@ -279,6 +279,7 @@ void write_solver(std::string& out, const SolverSpec& s) {
   out += fmt::format("binding_stiffness = {}\n", number(s.binding_stiffness));
   out += fmt::format("weave_drag = {}\n", number(s.weave_drag));
   out += fmt::format("relax_drag = {}\n", number(s.relax_drag));
+  out += fmt::format("drag_axial = {}\n", number(s.drag_axial));
   out += fmt::format("relax_tolerance = {}\n", number(s.relax_tolerance));
   out += fmt::format("test_tolerance = {}\n", number(s.test_tolerance));
   out += fmt::format("krylov_iterations = {}\n", s.krylov_iterations);

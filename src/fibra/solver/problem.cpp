@@ -41,6 +41,28 @@ void Problem::build_pattern() {
   m_pattern = BlockPattern(m_model.group_sizes(), sets);
   m_diagonal.resize(m_model.num_dofs());
   for (Index d = 0; d < m_model.num_dofs(); ++d) m_diagonal[d] = m_pattern.find(d, d);
+  m_position_offdiagonal.resize(m_model.num_nodes());
+  for (Index n = 0; n < m_model.num_nodes(); ++n) {
+    const Index d = kNodeDofs * n;
+    m_position_offdiagonal[n] = {m_pattern.find(d, d + 1), m_pattern.find(d, d + 2), m_pattern.find(d + 1, d + 2)};
+  }
+}
+
+void Problem::set_drag(double c, const VecX& anchor, double director_weight, double axial_weight) {
+  m_drag = c;
+  m_drag_anchor = anchor;
+  m_drag_director = director_weight;
+  m_drag_axial = axial_weight;
+  if (axial_weight == 1.0 || c <= 0.0) return;
+  // Unit tangent at each node from its neighbours along the fiber (one-sided at the ends).
+  m_drag_axis.resize(m_model.num_nodes());
+  for (const Fiber& f : m_model.fibers)
+    for (Index k = 0; k < f.num_nodes; ++k) {
+      const Index a = f.first_node + std::max<Index>(k - 1, 0), b = f.first_node + std::min(k + 1, f.num_nodes - 1);
+      const Vec3 t = anchor.segment<3>(kNodeDofs * b) - anchor.segment<3>(kNodeDofs * a);
+      const double len = t.norm();
+      m_drag_axis[f.first_node + k] = len > 0.0 ? Vec3(t / len) : Vec3::Zero();
+    }
 }
 
 bool Problem::set_contacts(std::vector<ContactElement> contacts, const FrictionParams& friction) {
@@ -131,15 +153,37 @@ double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hes
 
   // Drag towards the anchor (weave steps): a diagonal term on every node dof.
   if (m_drag > 0.0) {
-    for (Index n = 0; n < model.num_nodes(); ++n)
-      for (int d = 0; d < kNodeDofs; ++d) {
-        const Index dof = kNodeDofs * n + d;
-        const double c = d < 3 ? m_drag : m_drag * m_drag_director * m_node_r2[n];
-        const double u = q[dof] - m_drag_anchor[dof];
-        energy += 0.5 * c * u * u;
-        if (gradient) (*gradient)[dof] += c * u;
+    const bool axial = m_drag_axial != 1.0;
+    for (Index n = 0; n < model.num_nodes(); ++n) {
+      const Index base = kNodeDofs * n;
+      // Position: c/2 u^T P u, P = I - (1 - w_axial) t t^T.
+      const Vec3 u = q.segment<3>(base) - m_drag_anchor.segment<3>(base);
+      const Vec3 pu = drag_projected(n, u);
+      energy += 0.5 * m_drag * u.dot(pu);
+      if (gradient) gradient->segment<3>(base) += m_drag * pu;
+      if (hessian) {
+        const Vec3 t = axial ? m_drag_axis[n] : Vec3(Vec3::Zero());
+        const double s = axial ? 1.0 - m_drag_axial : 0.0;
+        for (int i = 0; i < 3; ++i)
+          if (!m_fixed[base + i]) (*hessian)[m_diagonal[base + i]] += m_drag * (1.0 - s * t[i] * t[i]);
+        if (axial) {
+          const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+          for (int k = 0; k < 3; ++k) {
+            const int i = pairs[k][0], j = pairs[k][1];
+            if (!m_fixed[base + i] && !m_fixed[base + j])
+              (*hessian)[m_position_offdiagonal[n][k]] -= m_drag * s * t[i] * t[j];
+          }
+        }
+      }
+      for (int d = 3; d < kNodeDofs; ++d) {
+        const Index dof = base + d;
+        const double c = m_drag * m_drag_director * m_node_r2[n];
+        const double ud = q[dof] - m_drag_anchor[dof];
+        energy += 0.5 * c * ud * ud;
+        if (gradient) (*gradient)[dof] += c * ud;
         if (hessian && !m_fixed[dof]) (*hessian)[m_diagonal[dof]] += c;
       }
+    }
     // Bodies too (their rotations scaled by their size).
     for (Index b = 0; m_bodies && b < m_bodies->num_bodies(); ++b)
       for (int d = 0; d < 6; ++d) {

@@ -1,6 +1,7 @@
 #pragma once
 /// The discrete problem at one load level: total potential Pi(q) = W_beams(q) - loads, its
 /// gradient (f_int - f_ext) and Hessian, with eliminated (fixed or prescribed) dofs.
+#include <array>
 #include <vector>
 
 #include "fibra/body/bodies.hpp"
@@ -48,13 +49,17 @@ class Problem {
   /// Evaluated state of every contact element at q (same order as contacts()).
   std::vector<ContactResponse> contact_responses(const VecX& q) const;
 
-  /// Drag (weave and relax steps): energy c/2 sum over nodes of |x0 - a|^2 + w r^2 (|g1 - a1|^2 +
-  /// |g2 - a2|^2) towards the anchor state `anchor` (the increment's start), w = `director_weight`
-  /// (1: the section boundary's motion); c = 0 removes it.
-  void set_drag(double c, const VecX& anchor, double director_weight = 1.0) {
-    m_drag = c;
-    m_drag_anchor = anchor;
-    m_drag_director = director_weight;
+  /// Drag (weave and relax steps): energy c/2 sum over nodes of (x0 - a)^T P (x0 - a) + w r^2
+  /// (|g1 - a1|^2 + |g2 - a2|^2) towards the anchor state `anchor` (the increment's start),
+  /// w = `director_weight` (1: the section boundary's motion), P = I - (1 - `axial_weight`) t t^T
+  /// with t the fiber's unit tangent at the node in the anchor state (1: isotropic; less: a
+  /// fiber slides along itself more freely, so a tow can draw in as it crimps); c = 0 removes it.
+  void set_drag(double c, const VecX& anchor, double director_weight = 1.0, double axial_weight = 1.0);
+  /// P u for node `node`'s position (the drag's force per unit stiffness, see set_drag).
+  Vec3 drag_projected(Index node, const Vec3& u) const {
+    if (m_drag_axial == 1.0 || m_drag_axis.empty()) return u;
+    const Vec3& t = m_drag_axis[node];
+    return u - (1.0 - m_drag_axial) * t.dot(u) * t;
   }
   const VecX& drag_anchor() const { return m_drag_anchor; }  ///< anchor of the drag
   double drag() const { return m_drag; }                      ///< drag stiffness per node [N/m]
@@ -83,10 +88,13 @@ class Problem {
   std::vector<double> m_contact_energy_buffer;
   VecX m_energy_base;
   double m_drag_director = 1.0;
+  double m_drag_axial = 1.0;
+  std::vector<Vec3> m_drag_axis;  // unit tangent per node in the drag's anchor state
   double m_drag = 0;
   VecX m_drag_anchor;
   std::vector<double> m_node_r2;  // squared section radius per node
   std::vector<Index> m_diagonal;  // value index of each diagonal entry
+  std::vector<std::array<Index, 3>> m_position_offdiagonal;  // per node: value index of (x,y), (x,z), (y,z)
   AssemblyTimes m_times;
 };
 

@@ -217,8 +217,11 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   // friction does not hold it, and with the r^2 weight (5.8e-5 N/m per node on the 480-fiber
   // sample) any shift of an indefinite tangent swamped it and stalled Newton; in relax steps,
   // the spin of the fibers near a tow end diverged as the drag fell (docs/theory/fabric.md).
+  // Weaving: along a fiber the drag is weaker (drag_axial), so the fibers slide along
+  // themselves as the tows crimp and the edges draw in, instead of stretching against a drag
+  // that holds every node (docs/theory/fabric.md, "Drag along the fibers").
   m_problem->set_drag(weave ? m_case.solver.weave_drag * k0 : relax ? m_relax_drag : 0.0, m_q_start,
-                      weave || relax ? kDirectorDrag : 1.0);
+                      weave || relax ? kDirectorDrag : 1.0, weave ? m_case.solver.drag_axial : 1.0);
 
   // METHOD §4: (1) contact elements, repeated while the set changes; (2) normals, repeated
   // while they turn; (3) Newton on the rest. A zone that penetrates too deep gets a stiffer
@@ -779,7 +782,13 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       if (relax) {
         // Drag force left at the end of the increment, relative to the reference force.
         double sum = 0.0;
+        for (Index node = 0; node < m_model.num_nodes(); ++node) {
+          const Index d = kNodeDofs * node;
+          const Vec3 u = m_problem->drag_projected(node, m_q.segment<3>(d) - m_q_start.segment<3>(d));
+          for (int i = 0; i < 3; ++i) sum += (u[i] * m_length_scale[d + i]) * (u[i] * m_length_scale[d + i]);
+        }
         for (Index d = 0; d < m_q.size(); ++d) {
+          if (d < m_model.node_dofs && d % kNodeDofs < 3) continue;  // positions: above
           const bool director = d < m_model.node_dofs && d % kNodeDofs >= 3;
           const double u = (m_q[d] - m_q_start[d]) * m_length_scale[d] * (director ? kDirectorDrag : 1.0);
           sum += u * u;
