@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -38,6 +39,24 @@ std::vector<std::vector<double>> read_curves(const fs::path& file) {
     std::string field;
     std::getline(ss, field, ',');  // step name
     while (std::getline(ss, field, ',')) row.push_back(std::stod(field));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// history.csv as rows of (column name -> text).
+std::vector<std::map<std::string, std::string>> read_history(const fs::path& file) {
+  std::ifstream in(file);
+  std::string line, field;
+  std::getline(in, line);
+  std::vector<std::string> names;
+  for (std::stringstream ss(line); std::getline(ss, field, ',');) names.push_back(field);
+  std::vector<std::map<std::string, std::string>> rows;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    std::map<std::string, std::string> row;
+    std::stringstream ss(line);
+    for (size_t k = 0; k < names.size() && std::getline(ss, field, ','); ++k) row[names[k]] = field;
     rows.push_back(row);
   }
   return rows;
@@ -106,6 +125,22 @@ TEST_F(Continue, TestingFromTheRelaxedStateRepeatsTheWholeRun) {
   }
   // The start row carries the relaxed tension (not zero: the edges hold the fabric).
   EXPECT_GT(b[0][4], 1.0);  // warp force [N]
+  // So does history.csv's initial row: every body's force, moment, displacement and rotation
+  // as the whole run's relax step left them.
+  const auto hw = read_history(whole / "history.csv"), hp = read_history(s_dir / "pull" / "history.csv");
+  ASSERT_FALSE(hp.empty());
+  const auto relaxed = std::find_if(hw.rbegin(), hw.rend(), [](const auto& row) { return row.at("step") == "relax"; });
+  ASSERT_NE(relaxed, hw.rend());
+  EXPECT_EQ(hp.front().at("step"), "initial");
+  int compared = 0;
+  for (const auto& [name, text] : hp.front()) {
+    if (name.rfind("body:", 0) != 0) continue;
+    const double x = std::stod(text), y = std::stod(relaxed->at(name));
+    EXPECT_NEAR(x, y, 1e-9 * std::max(1.0, std::abs(y))) << name;
+    ++compared;
+  }
+  EXPECT_EQ(compared, 12 * 12);  // 8 tow ends and 4 edges, 12 columns each
+  EXPECT_GT(std::abs(std::stod(hp.front().at("body:edge.x+:ux"))), 1e-7);
   const nlohmann::json s = read_json(s_dir / "pull" / "summary.json");
   EXPECT_EQ(s["start"]["step"], "relax");
   EXPECT_EQ(s["states"].size(), 1u);

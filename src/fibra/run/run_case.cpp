@@ -246,6 +246,15 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                                 bs.rotation, bs.force, bs.moment, bodies->member_positions(b, initial)});
     }
   std::vector<double> initial_extra(columns.size(), 0.0);
+  // The bodies' columns of the initial row: their state (zero at a fresh start; where the
+  // earlier run left them, with their forces, for a case that goes on from it).
+  for (const BodyPoint& bp : initial_bodies) {
+    const auto first = std::find(columns.begin(), columns.end(), "body:" + bp.name + ":fx");
+    if (first == columns.end() || columns.end() - first < 12) continue;
+    const Vec3* parts[4] = {&bp.force, &bp.moment, &bp.displacement, &bp.rotation};
+    for (int k = 0; k < 4; ++k)
+      for (int i = 0; i < 3; ++i) initial_extra[(first - columns.begin()) + 3 * k + i] = (*parts[k])[i];
+  }
   if (fabric) {
     const FabricReport rep = fabric_report(c, model, initial);
     const size_t n = initial_extra.size();
