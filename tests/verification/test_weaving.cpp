@@ -210,7 +210,7 @@ test::Solved woven_then(const std::string& step) {
 // Biaxial, ratio 0.5: the warp edges move apart by 0.4 % of their distance at the step's start
 // (not at the flat start) and the weft ones by half that; at both levels the four edge forces
 // balance (an equilibrium without drag), and both directions carry more than the weaving's
-// tension. Measured: warp 3.0 -> 14.5 N, weft 3.0 -> 11.5 N.
+// tension. Measured: warp 3.0 -> 14.6 N, weft 3.0 -> 11.5 N.
 TEST(FabricTests, BiaxialPullsFromTheWovenState) {
   const test::Solved s =
       woven_then("[[step]]\nname = \"pull\"\nkind = \"biaxial\"\nstrain = 0.004\nratio = 0.5\nincrements = 2\n");
@@ -240,8 +240,8 @@ TEST(FabricTests, BiaxialPullsFromTheWovenState) {
 
 // Uniaxial (ratio 0): the weft edges stay free along the weft and keep the weaving's tension
 // (0.5 N per fiber, 3 N), while the warp is pulled by 0.4 %: the warp straightens, the weft
-// crimps more and its edges draw in (measured -0.18 %); the warp carries less than with the
-// weft pulled too (10.98 N against 14.5 N at ratio 0.5).
+// crimps more and its edges draw in (measured -0.19 %); the warp carries less than with the
+// weft pulled too (10.94 N against 14.6 N at ratio 0.5).
 TEST(FabricTests, UniaxialLeavesTheWeftFree) {
   const test::Solved s =
       woven_then("[[step]]\nname = \"pull\"\nkind = \"biaxial\"\nstrain = 0.004\nratio = 0\nincrements = 2\n");
@@ -266,14 +266,14 @@ TEST(FabricTests, UniaxialLeavesTheWeftFree) {
 // Here: the uniaxial pull (ratio 0: the weft free along y under its weaving tension, 0.01 N
 // per fiber) of a 2 x 2 plain weave of three-fiber tows with 3 mm of free tow beyond the
 // crossings, 0.6 % in six load levels. Measured: tangent 920 N over the first level
-// (0.27 n E A), 3 305 N over the last (0.97 n E A), ratio 3.6; warp crimp 0.53 % -> 0.08 %,
-// weft crimp 0.53 % -> 1.43 %.
+// (0.27 n E A), 3 301 N over the last (0.97 n E A), ratio 3.6; warp crimp 0.53 % -> 0.08 %,
+// weft crimp 0.53 % -> 1.44 %.
 // Why the long free tows: in tows one fiber thick the crimp amplitude h is about r, and a
 // sine-shaped warp straightens against the weft's bending with a stiffness 4 E I r / h^3 = E A
 // at the start, so the tangent starts near E A / 2 and can at most double. With the friction
-// sample's free ends (half a spacing) and the same tension the uniaxial tangent goes from 1 718
-// to 2 644 N over 1 % in ten levels (ratio 1.5); equibiaxial pulls (the weft pulled too: no
-// crimp interchange) are nearly straight (3 257 -> 3 496 N over 1 % in four levels, the fibers'
+// sample's free ends (half a spacing) and the same tension the uniaxial tangent goes from 1 712
+// to 2 638 N over 1 % in ten levels (ratio 1.5); equibiaxial pulls (the weft pulled too: no
+// crimp interchange) are nearly straight (3 270 -> 3 509 N over 1 % in four levels, the fibers'
 // own stiffening). With 3 mm free the weft's crossings move apart by bending the long ends, and
 // the straightening stiffness falls from about n E A to 0.37 n E A. Tows several fibers thick
 // (the 480-fiber sample's) would give the J in the fabric itself.
@@ -324,7 +324,7 @@ TEST(FabricTests, BiaxialCurveIsJShaped) {
 // lateral edges turn about z. The 2 x 2 plain weave is its own image under a half turn about y,
 // which maps a shear to its reverse: the force added by the shear changes sign with the angle
 // and nearly keeps its size (within 20 %: the woven state, reached with friction, is not exactly
-// symmetric; measured +0.59 and -0.51 N).
+// symmetric; measured +0.56 and -0.52 N).
 TEST(FabricTests, ShearReversedNearlyMirrors) {
   double added[2] = {0, 0};
   for (int k = 0; k < 2; ++k) {
