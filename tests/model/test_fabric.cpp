@@ -125,7 +125,7 @@ kind = "weave"
       EXPECT_EQ(b.bodies.front(), "warp0.end");
     }
   // First-step conditions: the x-/y- edges held, the x+/y+ edges free along their tows under
-  // the tension; every tow end held in rotation and free in position.
+  // the tension; every tow end held in rotation and out of the plane (z), free in the plane.
   const StepSpec& first = c.steps.front();
   ASSERT_EQ(first.bodies.size(), 4u + 2u * 7u);
   int tow_ends = 0;
@@ -136,7 +136,10 @@ kind = "weave"
       EXPECT_TRUE(b.has_displacement) << b.name;
       EXPECT_EQ(b.force.has_value(), b.name == "edge.x+" || b.name == "edge.y+") << b.name;
     } else {
-      EXPECT_FALSE(b.has_displacement) << b.name;
+      EXPECT_TRUE(b.has_displacement) << b.name;
+      EXPECT_FALSE(b.displacement[0].has_value()) << b.name;
+      EXPECT_FALSE(b.displacement[1].has_value()) << b.name;
+      EXPECT_EQ(b.displacement[2], std::optional<double>(0.0)) << b.name;
       EXPECT_FALSE(b.force.has_value()) << b.name;
       ++tow_ends;
     }

@@ -351,7 +351,8 @@ void expand_fabric(Case& c) {
       }
       first.bodies.push_back(b);
     }
-    // Tow ends held in rotation, free in position: a grip does not let a tow end turn in it.
+    // Tow ends held in rotation and out of the plane, free in the plane: a grip does not let a
+    // tow end turn in it or leave it.
     // The averaged rotation of a group of fiber ends is only as well defined as the group is
     // far from a line, and a tow end flattens as the fabric relaxes (12 fibers in a tow 0.8 mm
     // wide fit in one layer): the best-fit rotation about the flattened end's long axis then
@@ -367,6 +368,12 @@ void expand_fabric(Case& c) {
         b.name = name;
         b.has_rotation = true;
         b.rotation = {0.0, 0.0, 0.0};
+        // Held out of the plane too (a grip holds the tow at its plane): free, each tow end's
+        // height was a mode of almost no stiffness (a taut free length swinging about its last
+        // crossing), which the relax step's drag let creep by a few um per increment on the
+        // 480-fiber sample. docs/theory/fabric.md, "Tow ends".
+        b.has_displacement = true;
+        b.displacement[2] = 0.0;
         first.bodies.push_back(b);
       }
   }
