@@ -25,6 +25,7 @@
 #include "fibra/io/output_writer.hpp"
 #include "fibra/io/slice.hpp"
 #include "fibra/model/model.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace fibra {
 namespace {
@@ -98,12 +99,7 @@ fibers = ["c1"]
 [[step]]
 )";
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using test::slurp;
 
 /// A polygon of the SVG.
 struct SvgPolygon {
@@ -278,20 +274,9 @@ Png decode_png(const std::string& file) {
   return png;
 }
 
-class Slice : public ::testing::Test {
+class Slice : public test::ScratchDirTest {
  protected:
-  void SetUp() override {
-    m_dir = fs::temp_directory_path() /
-            ("fibra_slice_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-             std::to_string(static_cast<long>(::getpid())));
-    fs::remove_all(m_dir);
-    fs::create_directories(m_dir);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    if (!HasFailure()) fs::remove_all(m_dir, ec);
-  }
-  fs::path m_dir;
+  Slice() : ScratchDirTest("fibra_slice_") {}
 };
 
 // ------------------------------------------------------------------------------------------

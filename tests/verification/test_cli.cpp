@@ -20,50 +20,22 @@
 #include "io/case_compare.hpp"
 #include "support/curve_checks.hpp"
 #include "support/fabric_cases.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace fibra {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
+using Result = test::CliResult;
+using test::slurp;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-class Cli : public ::testing::Test {
+class Cli : public test::ScratchDirTest {
  protected:
-  void SetUp() override {
-    m_dir = fs::temp_directory_path() /
-            ("fibra_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-             std::to_string(static_cast<long>(::getpid())));
-    fs::remove_all(m_dir);
-    fs::create_directories(m_dir);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    if (!HasFailure()) fs::remove_all(m_dir, ec);
-  }
+  Cli() : ScratchDirTest("fibra_cli_") {}
 
   // Runs `fibra ARGS` in the temporary directory, capturing stdout and stderr.
-  Result fibra(const std::string& args) const {
-    const fs::path out = m_dir / "stdout.txt", err = m_dir / "stderr.txt";
-    const std::string cmd = "cd '" + m_dir.string() + "' && '" + std::string(FIBRA_BINARY_DIR) + "/fibra' " + args +
-                            " > '" + out.string() + "' 2> '" + err.string() + "'";
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(out);
-    r.err = slurp(err);
-    return r;
-  }
+  Result fibra(const std::string& args) const { return test::run_fibra(m_dir, args); }
 
   fs::path write(const std::string& name, const std::string& text) const {
     const fs::path p = m_dir / name;
@@ -71,7 +43,6 @@ class Cli : public ::testing::Test {
     return p;
   }
 
-  fs::path m_dir;
 };
 
 const std::string kGood = R"(

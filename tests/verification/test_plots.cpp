@@ -21,23 +21,15 @@
 
 #include "support/curve_checks.hpp"
 #include "support/fabric_cases.hpp"
+#include "support/scratch_dir.hpp"
 
 namespace fibra {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using Result = test::CliResult;
+using test::slurp;
 
 /// A flat plain weave (2 x 2 tows of 3 fibers) without contact, pulled then sheared at once:
 /// the edge bodies exist, so the test steps run and write their curves, in a tenth of a second.
@@ -57,36 +49,14 @@ angle = 2
 increments = 2
 )";
 
-class Plots : public ::testing::Test {
+class Plots : public test::ScratchDirTest {
  protected:
-  void SetUp() override {
-    m_dir = fs::temp_directory_path() /
-            ("fibra_plots_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
-             std::to_string(static_cast<long>(::getpid())));
-    fs::remove_all(m_dir);
-    fs::create_directories(m_dir);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    if (!HasFailure()) fs::remove_all(m_dir, ec);
-  }
+  Plots() : ScratchDirTest("fibra_plots_") {}
 
   /// Runs `ENV fibra ARGS` in the temporary directory, capturing stdout and stderr.
-  Result fibra(const std::string& args, const std::string& env = "") const {
-    const fs::path out = m_dir / "stdout.txt", err = m_dir / "stderr.txt";
-    const std::string cmd = "cd '" + m_dir.string() + "' && " + env + " '" + std::string(FIBRA_BINARY_DIR) +
-                            "/fibra' " + args + " > '" + out.string() + "' 2> '" + err.string() + "'";
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(out);
-    r.err = slurp(err);
-    return r;
-  }
+  Result fibra(const std::string& args, const std::string& env = "") const { return test::run_fibra(m_dir, args, env); }
 
   void write(const std::string& name, const std::string& text) const { std::ofstream(m_dir / name) << text; }
-
-  fs::path m_dir;
 };
 
 /// Every series of the sidecar STEM.json matches its curves file; returns the sidecar.
