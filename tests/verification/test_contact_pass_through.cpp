@@ -74,41 +74,50 @@ increments = 1
   EXPECT_LE(s.increments.back().contact.max_penetration_ratio, 0.02 * (1 + 1e-9));
 }
 
+// Two straight fibers "a" and "b" (points as TOML arrays) of one material, contact on.
+std::string two_fibers(const char* material, double young, double poisson, double r, const std::string& a_points,
+                       const std::string& b_points, int elements) {
+  return fmt::format(R"(
+[[material]]
+name = "{0}"
+young = {1}
+poisson = {2}
+[[fiber]]
+name = "a"
+material = "{0}"
+radius = {3}
+points = {4}
+elements = {6}
+[[fiber]]
+name = "b"
+material = "{0}"
+radius = {3}
+points = {5}
+elements = {6}
+[contact]
+[[step]]
+)",
+                     material, young, poisson, r, a_points, b_points, elements);
+}
+
+// q with every node of fiber f moved by shift.
+VecX fiber_moved(const Model& model, VecX q, int f, const Vec3& shift) {
+  const Fiber& fiber = model.fibers[f];
+  for (Index k = 0; k < fiber.num_nodes; ++k) q.segment<3>(9 * (fiber.first_node + k)) += shift;
+  return q;
+}
+
 // The swept check alone: two crossed chords, the second moving from above to below the first,
 // through it (crossed) and around its end (not crossed).
 TEST(ContactPassThrough, SweptCheckSeesLinesGoingThroughNotAround) {
   const double r = 0.5e-3;
-  const std::string toml = fmt::format(R"(
-[[material]]
-name = "steel"
-young = 210e9
-poisson = 0.3
-[[fiber]]
-name = "a"
-material = "steel"
-radius = {r}
-points = [[-10e-3, 0, 0], [10e-3, 0, 0]]
-elements = 4
-[[fiber]]
-name = "b"
-material = "steel"
-radius = {r}
-points = [[1e-3, -10e-3, 5e-3], [1e-3, 10e-3, 5e-3]]
-elements = 4
-[contact]
-[[step]]
-)",
-                                       fmt::arg("r", r));
-  const Case c = parse_case_toml(toml, "swept.toml");
+  const Case c = parse_case_toml(
+      two_fibers("steel", 210e9, 0.3, r, "[[-10e-3, 0, 0], [10e-3, 0, 0]]", "[[1e-3, -10e-3, 5e-3], [1e-3, 10e-3, 5e-3]]", 4),
+      "swept.toml");
   const Model model = build_model(c);
   ContactManager contacts(model, c.contact);
   const VecX start = model.reference;
-  auto moved = [&](const Vec3& shift) {
-    VecX q = start;
-    const Fiber& b = model.fibers[1];
-    for (Index k = 0; k < b.num_nodes; ++k) q.segment<3>(9 * (b.first_node + k)) += shift;
-    return q;
-  };
+  auto moved = [&](const Vec3& shift) { return fiber_moved(model, start, 1, shift); };
   EXPECT_TRUE(contacts.crossed(start, moved(Vec3(0, 0, -10e-3))));     // straight down through a
   EXPECT_FALSE(contacts.crossed(start, moved(Vec3(0, 0, -4e-3))));     // stops 1 mm above a
   // Around the end of a (x = 10 mm): when b is level with a it is at x = 13.5 mm.
@@ -122,38 +131,16 @@ elements = 4
 // other. Going down through the other by the same route is still a crossing.
 TEST(ContactPassThrough, SweptCheckLetsSideBySideFibersMoveAcrossTheirPlane) {
   const double r = 20e-6, angle = 10.0 * std::acos(-1.0) / 180.0, y0 = 0.97 * 2.0 * r;
-  const std::string toml = fmt::format(R"(
-[[material]]
-name = "glass"
-young = 72e9
-poisson = 0.22
-[[fiber]]
-name = "a"
-material = "glass"
-radius = {r}
-points = [[-0.5e-3, 0, 0], [0.5e-3, 0, 0]]
-elements = 1
-[[fiber]]
-name = "b"
-material = "glass"
-radius = {r}
-points = [[-0.5e-3, {y0}, 1e-6], [{x1}, {y1}, 1e-6]]
-elements = 1
-[contact]
-[[step]]
-)",
-                                       fmt::arg("r", r), fmt::arg("y0", y0), fmt::arg("x1", -0.5e-3 + 1e-3 * std::cos(angle)),
-                                       fmt::arg("y1", y0 + 1e-3 * std::sin(angle)));
-  const Case c = parse_case_toml(toml, "side_by_side.toml");
+  const Case c = parse_case_toml(
+      two_fibers("glass", 72e9, 0.22, r, "[[-0.5e-3, 0, 0], [0.5e-3, 0, 0]]",
+                 fmt::format("[[-0.5e-3, {}, 1e-6], [{}, {}, 1e-6]]", y0, -0.5e-3 + 1e-3 * std::cos(angle),
+                             y0 + 1e-3 * std::sin(angle)),
+                 1),
+      "side_by_side.toml");
   const Model model = build_model(c);
   ContactManager contacts(model, c.contact);
   const VecX start = model.reference;
-  auto moved = [&](const Vec3& shift) {
-    VecX q = start;
-    const Fiber& b = model.fibers[1];
-    for (Index k = 0; k < b.num_nodes; ++k) q.segment<3>(9 * (b.first_node + k)) += shift;
-    return q;
-  };
+  auto moved = [&](const Vec3& shift) { return fiber_moved(model, start, 1, shift); };
   EXPECT_FALSE(contacts.crossed(start, moved(Vec3(0, 0, -2e-6))));        // 1 um above to 1 um below
   EXPECT_TRUE(contacts.crossed(start, moved(Vec3(0, -2.0 * y0, -2e-6))));  // through a to its other side
 }
