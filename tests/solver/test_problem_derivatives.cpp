@@ -250,8 +250,13 @@ TEST(ProblemDerivatives, DragAlongAndAcrossTheFiberMatchesFiniteDifferences) {
     const Eigen::MatrixXd hd = (dense(p.pattern(), h1) - dense(p.pattern(), h0))(free, free);
     const Eigen::MatrixXd hd_fd = fd_jacobian(drag_gradient, q, h)(free, free);
     EXPECT_LT(rel_error(hd, hd_fd), 1e-6) << "axial weight " << axial;
-    // The gradient is the drag's force: zero at the anchor.
+    // The gradient is the drag's force: zero at the anchor; drag_force_norm is its scaled norm.
     EXPECT_EQ(drag_gradient(anchor).norm(), 0.0);
+    VecX scale = VecX::Ones(q.size());
+    for (Index d = 0; d < q.size(); ++d)
+      if (d % 9 >= 3) scale[d] = 25.0;  // e.g. 1 / r on the section vectors
+    p.set_drag(stiffness, anchor, director, axial);
+    EXPECT_NEAR(p.drag_force_norm(q, scale), scale.cwiseProduct(gd).norm(), 1e-9 * scale.cwiseProduct(gd).norm());
 
     // Node 3 moved along the anchor's tangent there (from its neighbours), then across it.
     const Index node = 3;

@@ -3,24 +3,17 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <map>
 
 #include <fmt/core.h>
 
 #include "fibra/beam/beam_element.hpp"
+#include "fibra/core/debug.hpp"
 #include "fibra/contact/broad_phase.hpp"
 #include "fibra/contact/detection.hpp"
 
 namespace fibra {
 namespace {
-
-// FIBRA_DEBUG_NEWTON set (the solver's debug switch): the pass-through checks say which pair
-// cut an increment.
-bool debug_contact() {
-  static const bool on = std::getenv("FIBRA_DEBUG_NEWTON") != nullptr;
-  return on;
-}
 
 // Centre of the section of particle p (x0 at its eta) and the element dofs pointer.
 Vec3 section_centre(const Model& model, const Particle& p, const VecX& q) {
@@ -201,7 +194,7 @@ bool ContactManager::passed_through(const std::vector<ContactElement>& contacts,
   for (size_t k = 0; k < contacts.size(); ++k)
     if (contacts[k].fresh && -responses[k].gap > 0.5 * pair_radius(contacts[k]) &&
         -responses[k].gap > 4.0 * m_spec.max_penetration * pair_radius(contacts[k])) {
-      if (debug_contact())
+      if (debug_newton())
         fmt::print(stderr, " passed through: elements {} and {}, penetration {:.3e} (radius {:.3e})\n",
                    contacts[k].a.element, contacts[k].b.element, -responses[k].gap, pair_radius(contacts[k]));
       return true;
@@ -275,7 +268,7 @@ bool ContactManager::crossed(const VecX& q_start, const VecX& q) const {
     // the slightest motion across their plane, their lines meeting beyond the chords' ends:
     // that is not a crossing.
     if (gap < 0.5 * (radius(pr.first) + radius(pr.second))) {
-      if (debug_contact())
+      if (debug_newton())
         fmt::print(stderr, " crossed: elements {} and {}, gap {:.3e} at tau {:.3f}\n", pr.first, pr.second, gap, tau);
       return true;
     }

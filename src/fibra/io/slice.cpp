@@ -19,6 +19,7 @@
 
 #include "fibra/beam/beam_element.hpp"
 #include "fibra/core/error.hpp"
+#include "fibra/core/file.hpp"
 
 namespace fibra {
 
@@ -576,25 +577,6 @@ std::vector<std::uint8_t> make_png(const Layout& l, const std::vector<SliceCut>&
   return encode_png(r);
 }
 
-void write_file(const std::string& path, const void* data, size_t bytes) {
-  const std::string tmp = path + ".tmp";
-  {
-    errno = 0;
-    std::FILE* f = std::fopen(tmp.c_str(), "wb");
-    if (!f) throw RunError(fmt::format("cannot open for writing '{}': {}", tmp, std::strerror(errno)));
-    const bool ok = std::fwrite(data, 1, bytes, f) == bytes && std::fflush(f) == 0;
-    const int err = errno;
-    if (std::fclose(f) != 0 || !ok) {
-      std::error_code ec;
-      fs::remove(tmp, ec);
-      throw RunError(fmt::format("cannot write '{}': {}", tmp, std::strerror(err ? err : errno)));
-    }
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) throw RunError(fmt::format("cannot rename '{}' to '{}': {}", tmp, path, ec.message()));
-}
-
 /// Splits one CSV line into fields (quoted fields: "..." with doubled quotes).
 bool split_csv(const std::string& line, std::vector<std::string>& fields) {
   fields.clear();
@@ -799,9 +781,9 @@ int write_slice(const std::string& stem, const std::vector<SliceCut>& cuts, cons
   }
   const Layout layout = make_layout(cuts);
   const std::string svg = make_svg(layout, cuts, tows, axis, value, title);
-  write_file(stem + ".svg", svg.data(), svg.size());
+  write_file_atomic(stem + ".svg", svg);
   const std::vector<std::uint8_t> png = make_png(layout, cuts, tows);
-  write_file(stem + ".png", png.data(), png.size());
+  write_file_atomic(stem + ".png", std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
   return slice_fiber_count(cuts);
 }
 

@@ -235,11 +235,11 @@ struct OutputSpec {
   bool plots = true;           ///< plots of the biaxial and shear steps' curves (plots/, needs matplotlib)
 };
 
-/// A whole case file.
 /// File name stem of a step's name (outputs named after a step: curves_<stem>.csv,
 /// state/<stem>.bin, slices): characters other than letters, digits, '.', '-', '_' become '_'.
 std::string step_file_stem(const std::string& step);
 
+/// A whole case file.
 struct Case {
   std::string file;   ///< path of the case file (for messages)
   std::string name;   ///< file stem, used for the default output directory

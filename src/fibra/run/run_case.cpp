@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fibra/core/error.hpp"
+#include "fibra/core/file.hpp"
 #include "fibra/io/case_writer.hpp"
 #include "fibra/io/output_writer.hpp"
 #include "fibra/io/slice.hpp"
@@ -27,30 +28,6 @@
 #include "fibra/solver/solver_state.hpp"
 
 namespace fibra {
-namespace {
-
-/// Writes `text` to PATH.tmp, then renames it over PATH; throws RunError on failure.
-void write_text_atomic(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  errno = 0;
-  std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-  if (!out) throw RunError(fmt::format("cannot open for writing '{}': {}", tmp, std::strerror(errno)));
-  out << text;
-  out.close();
-  if (!out) {
-    std::remove(tmp.c_str());
-    throw RunError(fmt::format("cannot write '{}'", tmp));
-  }
-  errno = 0;
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    std::remove(tmp.c_str());
-    throw RunError(fmt::format("cannot rename '{}' to '{}': {}", tmp, path, std::strerror(err)));
-  }
-}
-
-/// A step name as a file name: characters other than letters, digits, '.', '-', '_' become '_'.
-}  // namespace
 
 RunReport run_case(const Case& c, const RunOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -89,7 +66,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   OutputWriter writer(options.out_dir, model, columns, c.output.tube_sides);
   // The expanded case (a [fabric] as its fibers, bodies and tows): `fibra slice` and any later
   // look at the outputs rebuild the model from it.
-  write_text_atomic(writer.dir() + "/case.toml", write_case_toml(c));
+  write_file_atomic(writer.dir() + "/case.toml", write_case_toml(c));
   CurvePlotter plotter(c, writer.dir());
   std::vector<std::string> slice_files;  // relative to the output directory
   std::optional<FabricReport> last_fabric;

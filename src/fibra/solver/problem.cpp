@@ -110,6 +110,59 @@ std::vector<ContactResponse> Problem::contact_responses(const VecX& q) const {
   return out;
 }
 
+double Problem::drag_energy(const VecX& q, VecX* gradient, std::vector<double>* hessian) const {
+  const Model& model = m_model;
+  double energy = 0.0;
+  const bool axial = m_drag_axial != 1.0;
+  for (Index n = 0; n < model.num_nodes(); ++n) {
+    const Index base = kNodeDofs * n;
+    // Position: c/2 u^T P u, P = I - (1 - w_axial) t t^T.
+    const Vec3 u = q.segment<3>(base) - m_drag_anchor.segment<3>(base);
+    const Vec3 pu = drag_projected(n, u);
+    energy += 0.5 * m_drag * u.dot(pu);
+    if (gradient) gradient->segment<3>(base) += m_drag * pu;
+    if (hessian) {
+      Mat3 p = Mat3::Identity();
+      if (axial) p -= (1.0 - m_drag_axial) * m_drag_axis[n] * m_drag_axis[n].transpose();
+      for (int i = 0; i < 3; ++i)
+        if (!m_fixed[base + i]) (*hessian)[m_diagonal[base + i]] += m_drag * p(i, i);
+      if (axial) {  // the upper off-diagonal entries (x,y), (x,z), (y,z)
+        const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+        for (int k = 0; k < 3; ++k) {
+          const int i = pairs[k][0], j = pairs[k][1];
+          if (!m_fixed[base + i] && !m_fixed[base + j]) (*hessian)[m_position_offdiagonal[n][k]] += m_drag * p(i, j);
+        }
+      }
+    }
+    for (int d = 3; d < kNodeDofs; ++d) {
+      const Index dof = base + d;
+      const double c = m_drag * m_drag_director * m_node_r2[n];
+      const double ud = q[dof] - m_drag_anchor[dof];
+      energy += 0.5 * c * ud * ud;
+      if (gradient) (*gradient)[dof] += c * ud;
+      if (hessian && !m_fixed[dof]) (*hessian)[m_diagonal[dof]] += c;
+    }
+  }
+  // Bodies too (their rotations scaled by their size).
+  for (Index b = 0; m_bodies && b < m_bodies->num_bodies(); ++b)
+    for (int d = 0; d < 6; ++d) {
+      const Index dof = model.bodies[b].first_dof + d;
+      const double c = d < 3 ? m_drag : m_drag * m_bodies->size(b) * m_bodies->size(b);
+      const double u = q[dof] - m_drag_anchor[dof];
+      energy += 0.5 * c * u * u;
+      if (gradient) (*gradient)[dof] += c * u;
+      if (hessian && !m_fixed[dof]) (*hessian)[m_diagonal[dof]] += c;
+    }
+  return energy;
+}
+
+double Problem::drag_force_norm(const VecX& q, const VecX& scale) const {
+  if (m_drag <= 0.0) return 0.0;
+  VecX g = VecX::Zero(q.size());
+  drag_energy(q, &g, nullptr);
+  return scale.cwiseProduct(g).norm();
+}
+
 double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hessian) {
   const auto t0 = std::chrono::steady_clock::now();
   if (gradient) gradient->setZero(q.size());
@@ -151,50 +204,8 @@ double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hes
   // Averaged bindings of rigid bodies (augmented Lagrangian), sequential.
   if (m_bodies) energy += m_bodies->evaluate(q, target, gradient != nullptr, hessian != nullptr);
 
-  // Drag towards the anchor (weave steps): a diagonal term on every node dof.
-  if (m_drag > 0.0) {
-    const bool axial = m_drag_axial != 1.0;
-    for (Index n = 0; n < model.num_nodes(); ++n) {
-      const Index base = kNodeDofs * n;
-      // Position: c/2 u^T P u, P = I - (1 - w_axial) t t^T.
-      const Vec3 u = q.segment<3>(base) - m_drag_anchor.segment<3>(base);
-      const Vec3 pu = drag_projected(n, u);
-      energy += 0.5 * m_drag * u.dot(pu);
-      if (gradient) gradient->segment<3>(base) += m_drag * pu;
-      if (hessian) {
-        const Vec3 t = axial ? m_drag_axis[n] : Vec3(Vec3::Zero());
-        const double s = axial ? 1.0 - m_drag_axial : 0.0;
-        for (int i = 0; i < 3; ++i)
-          if (!m_fixed[base + i]) (*hessian)[m_diagonal[base + i]] += m_drag * (1.0 - s * t[i] * t[i]);
-        if (axial) {
-          const int pairs[3][2] = {{0, 1}, {0, 2}, {1, 2}};
-          for (int k = 0; k < 3; ++k) {
-            const int i = pairs[k][0], j = pairs[k][1];
-            if (!m_fixed[base + i] && !m_fixed[base + j])
-              (*hessian)[m_position_offdiagonal[n][k]] -= m_drag * s * t[i] * t[j];
-          }
-        }
-      }
-      for (int d = 3; d < kNodeDofs; ++d) {
-        const Index dof = base + d;
-        const double c = m_drag * m_drag_director * m_node_r2[n];
-        const double ud = q[dof] - m_drag_anchor[dof];
-        energy += 0.5 * c * ud * ud;
-        if (gradient) (*gradient)[dof] += c * ud;
-        if (hessian && !m_fixed[dof]) (*hessian)[m_diagonal[dof]] += c;
-      }
-    }
-    // Bodies too (their rotations scaled by their size).
-    for (Index b = 0; m_bodies && b < m_bodies->num_bodies(); ++b)
-      for (int d = 0; d < 6; ++d) {
-        const Index dof = model.bodies[b].first_dof + d;
-        const double c = d < 3 ? m_drag : m_drag * m_bodies->size(b) * m_bodies->size(b);
-        const double u = q[dof] - m_drag_anchor[dof];
-        energy += 0.5 * c * u * u;
-        if (gradient) (*gradient)[dof] += c * u;
-        if (hessian && !m_fixed[dof]) (*hessian)[m_diagonal[dof]] += c;
-      }
-  }
+  // Drag towards the anchor (weave, relax and test steps).
+  if (m_drag > 0.0) energy += drag_energy(q, gradient, hessian);
 
   // Dead forces: potential -f . (q - q_ref) (for a body's rotation dofs, the work of a moment
   // over the increment's rotation vector).

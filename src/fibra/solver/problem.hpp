@@ -55,14 +55,17 @@ class Problem {
   /// with t the fiber's unit tangent at the node in the anchor state (1: isotropic; less: a
   /// fiber slides along itself more freely, so a tow can draw in as it crimps); c = 0 removes it.
   void set_drag(double c, const VecX& anchor, double director_weight = 1.0, double axial_weight = 1.0);
+  /// Norm of the drag's force at q, each dof's component multiplied by `scale` (e.g. 1/r on
+  /// section vectors, making their generalized forces forces); 0 without drag.
+  double drag_force_norm(const VecX& q, const VecX& scale) const;
+  const VecX& drag_anchor() const { return m_drag_anchor; }  ///< anchor of the drag
+  double drag() const { return m_drag; }                      ///< drag stiffness per node [N/m]
   /// P u for node `node`'s position (the drag's force per unit stiffness, see set_drag).
   Vec3 drag_projected(Index node, const Vec3& u) const {
     if (m_drag_axial == 1.0 || m_drag_axis.empty()) return u;
     const Vec3& t = m_drag_axis[node];
     return u - (1.0 - m_drag_axial) * t.dot(u) * t;
   }
-  const VecX& drag_anchor() const { return m_drag_anchor; }  ///< anchor of the drag
-  double drag() const { return m_drag; }                      ///< drag stiffness per node [N/m]
   /// Sets the state from which moment work is measured in evaluate()'s energy (moment
   /// potentials are only defined up to whole turns, so energies are compared near this state).
   void set_energy_base(const VecX& q) { m_energy_base = q; }
@@ -72,6 +75,8 @@ class Problem {
 
  private:
   void build_pattern();
+  /// The drag's energy at q (set_drag), adding its gradient and Hessian values when asked.
+  double drag_energy(const VecX& q, VecX* gradient, std::vector<double>* hessian) const;
   const Model& m_model;
   BodySystem* m_bodies = nullptr;
   StencilSet m_beams;

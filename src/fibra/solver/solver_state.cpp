@@ -1,14 +1,13 @@
 #include "fibra/solver/solver_state.hpp"
 
-#include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <fstream>
 #include <type_traits>
 
 #include <fmt/core.h>
 
 #include "fibra/core/error.hpp"
+#include "fibra/core/file.hpp"
 #include "fibra/model/model.hpp"
 
 namespace fibra {
@@ -20,30 +19,32 @@ constexpr char kMagic[] = "fibra state\n";
 constexpr std::uint32_t kVersion = 1;
 constexpr char kEnd[] = "end of state\n";
 
+// Appends the fields' bytes to a buffer (the file is then written at once, atomically).
 class Out {
  public:
-  explicit Out(std::ofstream& s) : m_s(s) {}
+  explicit Out(std::string& s) : m_s(s) {}
   template <typename T>
   void put(const T& v) {
     static_assert(std::is_arithmetic_v<T>);
-    m_s.write(reinterpret_cast<const char*>(&v), sizeof(T));
+    bytes(&v, sizeof(T));
   }
   void put(const std::string& v) {
     put(static_cast<std::uint64_t>(v.size()));
-    m_s.write(v.data(), static_cast<std::streamsize>(v.size()));
+    bytes(v.data(), v.size());
   }
-  void put(const Vec3& v) { m_s.write(reinterpret_cast<const char*>(v.data()), 3 * sizeof(double)); }
+  void put(const Vec3& v) { bytes(v.data(), 3 * sizeof(double)); }
   void put(const VecX& v) {
     put(static_cast<std::uint64_t>(v.size()));
-    m_s.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(double)));
+    bytes(v.data(), static_cast<size_t>(v.size()) * sizeof(double));
   }
   void put(const std::vector<double>& v) {
     put(static_cast<std::uint64_t>(v.size()));
-    m_s.write(reinterpret_cast<const char*>(v.data()), static_cast<std::streamsize>(v.size() * sizeof(double)));
+    bytes(v.data(), v.size() * sizeof(double));
   }
+  void bytes(const void* p, size_t n) { m_s.append(static_cast<const char*>(p), n); }
 
  private:
-  std::ofstream& m_s;
+  std::string& m_s;
 };
 
 class In {
@@ -117,12 +118,10 @@ ModelFingerprint fingerprint(const Model& model, Index bindings) {
 }
 
 void write_state_file(const std::string& path, const SolverState& s) {
-  const std::string tmp = path + ".tmp";
+  std::string buffer;
   {
-    std::ofstream file(tmp, std::ios::binary | std::ios::trunc);
-    if (!file) throw RunError(fmt::format("cannot open for writing '{}'", tmp));
-    Out o(file);
-    file.write(kMagic, sizeof(kMagic) - 1);
+    Out o(buffer);
+    o.bytes(kMagic, sizeof(kMagic) - 1);
     o.put(kVersion);
     o.put(s.model.dofs);
     o.put(s.model.elements);
@@ -161,13 +160,9 @@ void write_state_file(const std::string& path, const SolverState& s) {
       o.put(d.first);
       o.put(d.second);
     }
-    file.write(kEnd, sizeof(kEnd) - 1);
-    file.close();
-    if (!file) throw RunError(fmt::format("cannot write '{}' (disk full?)", tmp));
+    o.bytes(kEnd, sizeof(kEnd) - 1);
   }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw RunError(fmt::format("cannot rename '{}' to '{}': {}", tmp, path, ec.message()));
+  write_file_atomic(path, buffer);
 }
 
 SolverState read_state_file(const std::string& path) {

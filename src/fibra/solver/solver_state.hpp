@@ -40,7 +40,8 @@ struct SolverState {
   std::map<Index, std::pair<double, double>> disp;    ///< prescribed dofs (start, end) of q - reference
 };
 
-/// Writes `state` to `path` (through a temporary file renamed into place; throws RunError).
+/// Writes `state` to `path` (write_file_atomic: through a temporary file renamed into place;
+/// throws RunError).
 void write_state_file(const std::string& path, const SolverState& state);
 /// Reads a state file; throws InputError naming `path` if it is missing, truncated or not a
 /// state file of this version.

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <map>
 
+#include "fibra/core/debug.hpp"
 #include "fibra/core/error.hpp"
 #include "fibra/model/fabric.hpp"
 #include "fibra/solver/krylov.hpp"
@@ -38,12 +39,6 @@ struct StaticSolver::Program {
 
 namespace {
 constexpr double kDirectorDrag = 100.0;  // weight of the section vectors' drag in weave and relax steps
-
-// FIBRA_DEBUG_NEWTON set: every Newton iteration, normal update and cone freeze is printed.
-bool debug_newton() {
-  static const bool on = std::getenv("FIBRA_DEBUG_NEWTON") != nullptr;
-  return on;
-}
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -780,20 +775,9 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         continue;
       }
       if (relax) {
-        // Drag force left at the end of the increment, relative to the reference force.
-        double sum = 0.0;
-        for (Index node = 0; node < m_model.num_nodes(); ++node) {
-          const Index d = kNodeDofs * node;
-          const Vec3 u = m_problem->drag_projected(node, m_q.segment<3>(d) - m_q_start.segment<3>(d));
-          for (int i = 0; i < 3; ++i) sum += (u[i] * m_length_scale[d + i]) * (u[i] * m_length_scale[d + i]);
-        }
-        for (Index d = 0; d < m_q.size(); ++d) {
-          if (d < m_model.node_dofs && d % kNodeDofs < 3) continue;  // positions: above
-          const bool director = d < m_model.node_dofs && d % kNodeDofs >= 3;
-          const double u = (m_q[d] - m_q_start[d]) * m_length_scale[d] * (director ? kDirectorDrag : 1.0);
-          sum += u * u;
-        }
-        m_relax_residual = m_relax_drag * std::sqrt(sum) / std::max(m_reference_force, 1e-300);
+        // Drag force left at the end of the increment (scaled like the residual), relative to
+        // the reference force.
+        m_relax_residual = m_problem->drag_force_norm(m_q, m_force_scale) / std::max(m_reference_force, 1e-300);
         const bool loaded = lambda + step_dl >= 1.0 - 1e-12;
         if (test) {
           level_settled = m_relax_residual <= opt.test_tolerance && m_normals_settled;
