@@ -145,6 +145,44 @@ void BM_AssemblyGradient(benchmark::State& state) {
 }
 BENCHMARK(BM_AssemblyGradient)->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
 
+// The drag of weave, relax and test steps on its own (Problem::drag_force_norm evaluates its
+// gradient alone, as the solver does once per relax increment) and in the assembly of E + g + H
+// with it, one thread: isotropic (axial weight 1, relax and test steps) and weak along the
+// fibers (0.01, weave steps). Its cost beside BM_Assembly/threads:1 is the drag's per-node loop.
+void BM_AssemblyWithDrag(benchmark::State& state) {
+  Bundle& b = bundle();
+  OmpThreads omp(1);
+  const double axial = static_cast<double>(state.range(0)) / 100.0;
+  VecX anchor = b.model.reference;
+  for (Index d = 0; d < anchor.size(); ++d) anchor[d] -= 1e-6 * static_cast<double>(d % 7);
+  b.problem->set_drag(1e4, anchor, 100.0, axial);
+  VecX g;
+  std::vector<double> h;
+  b.problem->evaluate(b.q, &g, &h);
+  for (auto _ : state) {
+    double e = b.problem->evaluate(b.q, &g, &h);
+    benchmark::DoNotOptimize(e);
+    benchmark::ClobberMemory();
+  }
+  b.problem->set_drag(0.0, anchor);
+  state.counters["nodes"] = static_cast<double>(b.model.num_nodes());
+}
+BENCHMARK(BM_AssemblyWithDrag)->ArgName("axial_percent")->Arg(100)->Arg(1)->MinTime(2.0)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+void BM_DragForceNorm(benchmark::State& state) {
+  Bundle& b = bundle();
+  const double axial = static_cast<double>(state.range(0)) / 100.0;
+  b.problem->set_drag(1e4, b.model.reference, 100.0, axial);
+  const VecX scale = VecX::Ones(b.q.size());
+  for (auto _ : state) {
+    double n = b.problem->drag_force_norm(b.q, scale);
+    benchmark::DoNotOptimize(n);
+  }
+  b.problem->set_drag(0.0, b.model.reference);
+  state.counters["nodes"] = static_cast<double>(b.model.num_nodes());
+}
+BENCHMARK(BM_DragForceNorm)->ArgName("axial_percent")->Arg(100)->Arg(1)->UseRealTime()->Unit(benchmark::kMillisecond);
+
 // The symbolic analysis runs at the first factorization after analyze() (the last factor stays
 // usable until then): timed together, a fresh solver's analysis and first factorization.
 void BM_CholmodAnalyzeFactorize(benchmark::State& state) {
