@@ -610,6 +610,8 @@ const std::vector<BadCase> kBadCases = {
      "expected a number in (0, 1)"},
     {"TestToleranceOne", "max_cuts = 5", "max_cuts = 5\ntest_tolerance = 1", "solver.test_tolerance",
      "expected a number in (0, 1)"},
+    {"PseudoToleranceZero", "max_cuts = 5", "max_cuts = 5\npseudo_tolerance = 0", "solver.pseudo_tolerance",
+     "expected a number in (0, 1)"},
     {"LineSearchNotBool", "line_search = false", "line_search = 0", "solver.line_search",
      "expected a boolean"},
     {"LinearSolverUnknown", "linear_solver = \"eigen\"", "linear_solver = \"cholmd\"",

@@ -451,11 +451,13 @@ TEST(ContactThreePointBending, DeflectionMatchesBeamTheory) {
     const auto uz = [&](Index node) { return s.x0(snap.q, node, 0).z() - s.ref_x0(node, 0).z(); };
     const double w = 0.5 * (uz(8) + uz(72)) - uz(40);
     const double reference = force * std::pow(span, 3) / (48 * young * inertia);
-    // Supports: each carries half of the load (sum of their end reactions).
+    // Supports: each carries half of the load (sum of their end reactions), to the solver's
+    // equilibrium tolerance: the residual is below 1e-8 of the reference force (about 66 N
+    // here, the norm of all reactions), i.e. about 2e-6 of P; measured 1.1e-6 of P.
     const double left = (s.reaction(snap, "left", "first") + s.reaction(snap, "left", "last")).z();
     const double right = (s.reaction(snap, "right", "first") + s.reaction(snap, "right", "last")).z();
-    EXPECT_NEAR(left, 0.5 * force, 1e-6 * force);
-    EXPECT_NEAR(right, 0.5 * force, 1e-6 * force);
+    EXPECT_NEAR(left, 0.5 * force, 1e-5 * force);
+    EXPECT_NEAR(right, 0.5 * force, 1e-5 * force);
     EXPECT_EQ(snap.info.contact.zones, 3);
     EXPECT_NEAR(w / reference, 1.0, 0.01);
     EXPECT_LT(w, span / 400);  // small deflection

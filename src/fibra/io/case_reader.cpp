@@ -1578,8 +1578,8 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   check_keys(t, path,
              {"residual_tolerance", "displacement_tolerance", "max_iterations", "max_cuts",
               "line_search", "linear_solver", "ordering", "binding_tolerance", "max_binding_updates",
-              "binding_stiffness", "max_step", "weave_drag", "relax_drag", "drag_axial", "relax_tolerance", "test_tolerance", "krylov_iterations",
-              "krylov_tolerance"});
+              "binding_stiffness", "max_step", "weave_drag", "relax_drag", "drag_axial", "relax_tolerance", "test_tolerance", "pseudo_tolerance",
+              "krylov_iterations", "krylov_tolerance"});
   SolverSpec s;
   if (const Value* v = find(t, "residual_tolerance")) {
     s.residual_tolerance = positive(*v, join(path, "residual_tolerance"));
@@ -1652,6 +1652,13 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
     s.relax_tolerance = to_number(*v, key);
     if (!(s.relax_tolerance > 0))
       fail(key, fmt::format("expected a number > 0 (relative to the reference force), got {}", s.relax_tolerance), v);
+  }
+  if (const Value* v = find(t, "pseudo_tolerance")) {
+    const std::string key = join(path, "pseudo_tolerance");
+    s.pseudo_tolerance = to_number(*v, key);
+    if (!(s.pseudo_tolerance > 0 && s.pseudo_tolerance < 1))
+      fail(key, fmt::format("expected a number in (0, 1) (relative to the reference force), got {}", s.pseudo_tolerance),
+           v);
   }
   if (const Value* v = find(t, "krylov_iterations")) {
     s.krylov_iterations = to_int(*v, join(path, "krylov_iterations"), 0);

@@ -282,6 +282,7 @@ void write_solver(std::string& out, const SolverSpec& s) {
   out += fmt::format("drag_axial = {}\n", number(s.drag_axial));
   out += fmt::format("relax_tolerance = {}\n", number(s.relax_tolerance));
   out += fmt::format("test_tolerance = {}\n", number(s.test_tolerance));
+  out += fmt::format("pseudo_tolerance = {}\n", number(s.pseudo_tolerance));
   out += fmt::format("krylov_iterations = {}\n", s.krylov_iterations);
   out += fmt::format("krylov_tolerance = {}\n", number(s.krylov_tolerance));
 }

@@ -204,8 +204,9 @@ struct SolverSpec {
   double drag_axial = 1e-2;               ///< weave steps' drag: weight of a node's motion along its fiber (1: isotropic)
   double relax_tolerance = 1e-4;          ///< relax steps end when the drag's force is below this (relative)
   double test_tolerance = 1e-4;           ///< biaxial/shear: a load level is an equilibrium when the drag's force is below this (relative)
+  double pseudo_tolerance = 1e-6;         ///< Newton tolerance of pseudo-time increments (weave; relax/test while the drag force is above its tolerance)
   int krylov_iterations = 20;             ///< CG iterations preconditioned by the last factorization; 0 = factorize every iteration
-  double krylov_tolerance = 1e-8;         ///< CG stops at this residual relative to the Newton residual
+  double krylov_tolerance = 1e-3;         ///< CG stops at this residual relative to the Newton residual (inexact Newton)
   double max_step = -1;                   ///< largest motion per Newton iteration [m]; < 0 = automatic (half the smallest radius with contact, none without), 0 = none
   double binding_tolerance = 1e-8;        ///< largest binding violation, relative to the model size
   int max_binding_updates = 30;           ///< multiplier updates per increment (augmented Lagrangian)

@@ -197,6 +197,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   apply(step, lambda);
   m_contact_stats = ContactStats{};
   m_binding_updates = 0;
+  m_newton_tolerance = m_case.solver.residual_tolerance;
   if (!m_contact) return equilibrium(history, iterations, residual);
   const bool weave = m_case.steps[step].kind == StepSpec::Kind::Weave;
   // Weaving is a pseudo-time process: a drag towards the increment's start (stiffness per
@@ -216,7 +217,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   // themselves as the tows crimp and the edges draw in, instead of stretching against a drag
   // that holds every node (docs/theory/fabric.md, "Drag along the fibers").
   m_problem->set_drag(weave ? m_case.solver.weave_drag * k0 : relax ? m_relax_drag : 0.0, m_q_start,
-                      weave || relax ? kDirectorDrag : 1.0, weave ? m_case.solver.drag_axial : 1.0);
+                      weave || relax ? kDirectorDrag : 1.0, weave || relax ? m_case.solver.drag_axial : 1.0);
 
   // METHOD §4: (1) contact elements, repeated while the set changes; (2) normals, repeated
   // while they turn; (3) Newton on the rest. A zone that penetrates too deep gets a stiffer
@@ -273,6 +274,11 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     // (a slow creep would turn the normals a little at every lagged increment); the step ends
     // at an increment where they did not move.
     const bool lagged = weave || (relax && !m_relax_settling);
+    // A lagged increment is a pseudo-time state, not an equilibrium: its drag force is above
+    // the relax tolerance, so its Newton solves stop at the looser pseudo_tolerance (and the
+    // correction at the displacement tolerance scaled alike).
+    m_newton_tolerance = lagged ? std::max(m_case.solver.pseudo_tolerance, m_case.solver.residual_tolerance)
+                                : m_case.solver.residual_tolerance;
     for (int k = 0; k < spec.max_normal_updates; ++k) {
       int its = 0;
       if (!equilibrium(history, its, residual)) {
@@ -411,16 +417,18 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     residual = std::sqrt(res) / fref;
     history.push_back(residual);
     if (!std::isfinite(residual)) return false;
-    const bool small_step = last_step <= opt.displacement_tolerance * length;
+    const double tolerance = std::max(m_newton_tolerance, opt.residual_tolerance);
+    const bool small_step =
+        last_step <= opt.displacement_tolerance * (tolerance / opt.residual_tolerance) * length;
     // Converged: residual and correction small; or no correction needed at all.
-    if (residual <= opt.residual_tolerance && (small_step || iterations == 0)) return true;
+    if (residual <= tolerance && (small_step || iterations == 0)) return true;
     // Round-off floor: on slender fibers the residual cannot fall below about eps times the
     // section stiffness forces. Two successive negligible corrections with a residual that no
     // longer falls and is near the tolerance mean the solution is as exact as doubles allow.
     const size_t h = history.size();
     // (Not after a shifted factorization: its steps are damped, small by construction.)
     if (small_step && prev_small_step && !damped && h >= 2 && history[h - 1] > 0.5 * history[h - 2] &&
-        residual <= 1e3 * opt.residual_tolerance) {
+        residual <= 1e3 * tolerance) {
       ++m_stats.roundoff_convergences;
       return true;
     }
@@ -762,13 +770,13 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
                 "step \"{}\": stopped at load factor {:.6g} after {} increments tried (max_increments {}); the last "
                 "one, to {:.6g}, did not converge ({} Newton iterations, last relative residual {:.3e}, tolerance {:.1e})",
                 st.name, lambda, attempts, max_increments, lambda + step_dl, iterations,
-                history.empty() ? 0.0 : history.back(), opt.residual_tolerance);
+                history.empty() ? 0.0 : history.back(), std::max(m_newton_tolerance, opt.residual_tolerance));
           else
             result.message = fmt::format(
                 "step \"{}\": the increment from load factor {:.6g} to {:.6g} did not converge after {} cuts "
                 "({} Newton iterations, last relative residual {:.3e}, tolerance {:.1e})",
                 st.name, lambda, lambda + dl, cuts_here, iterations, history.empty() ? 0.0 : history.back(),
-                opt.residual_tolerance);
+                std::max(m_newton_tolerance, opt.residual_tolerance));
           return result;
         }
         if (!stiffer) dl *= 0.5;
@@ -788,10 +796,24 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
           m_relax_settling = loaded && m_relax_residual <= opt.relax_tolerance;
         }
         // Easy increments: the drag falls, faster the easier they were.
+        const double drag_before = m_relax_drag;
         if (iterations <= 12)
           m_relax_drag = std::max(0.25 * m_relax_drag, relax_min);
         else if (iterations <= 30)
           m_relax_drag = std::max(0.5 * m_relax_drag, relax_min);
+        // ... but not so far that the next increment would move a node by more than a quarter
+        // of the smallest radius (half the Newton step limit). A fiber that nothing holds yet
+        // (a loose fiber at a tow's edge) moves by about its out-of-balance force over the
+        // drag; with the drag cut by 4 it wanted several radii in one increment, its Newton
+        // steps ran into neighbours not yet in contact, and the increment failed (the
+        // 480-fiber relax: 25 iterations lost at every retry of the lower drag). Not after a
+        // test's load level, whose motion is imposed (the edges pulled or sheared).
+        if (m_max_step > 0.0 && (!test || step_dl == 0.0)) {
+          double moved = 0.0;
+          for (Index d = 0; d < m_q.size(); ++d)
+            moved = std::max(moved, std::abs(m_q[d] - m_q_start[d]) * m_length_scale[d]);
+          m_relax_drag = std::min(std::max(m_relax_drag, drag_before * moved / (0.5 * m_max_step)), relax_max);
+        }
       }
       lambda += step_dl;
       if (1.0 - lambda < 1e-12) lambda = 1.0;
