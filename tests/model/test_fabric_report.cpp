@@ -253,6 +253,9 @@ TEST(FabricReport, LenticularAndEllipticalCutsGiveTheirWidthAndThickness) {
   EXPECT_NEAR(sl.thickness, 2 * h + 2 * r, 1e-9 * r);
   expect_section(se, ellipse, r, 1e-9);
   expect_section(sl, lens, r, 1e-9);
+  // Both symmetric about the vertical through their centre, wider than thick: level.
+  EXPECT_NEAR(se.tilt, 0.0, 1e-12);
+  EXPECT_NEAR(sl.tilt, 0.0, 1e-12);
   // ... but the lens is smaller than the ellipse: pi w h vs the two circular segments.
   const double segment = R * R * (half_angle - std::sin(half_angle) * std::cos(half_angle));
   EXPECT_LT(2 * segment, kPi * w * h);
@@ -261,6 +264,68 @@ TEST(FabricReport, LenticularAndEllipticalCutsGiveTheirWidthAndThickness) {
   const double exact_lens = 2 * segment + (4 * R * half_angle) * r + kPi * r * r;
   EXPECT_LT(sl.area, exact_lens);
   EXPECT_GT(sl.area, 0.98 * exact_lens);
+}
+
+// The tilt of a section: the lens and ellipse cuts above, turned about the tow axis by a known
+// angle (sites rotated in the plane of the cut), in a warp and in a weft tow. The tilt is the
+// angle of the centres' principal axis, so a symmetric cloud turned by a gives a, whatever its
+// shape; positive when the section rises towards +y (warp) or +x (weft). tow_section cuts any
+// plane with the report's measures: at the mid-section's plane it gives the mid-section.
+TEST(FabricReport, TurnedCutsGiveTheirTilt) {
+  const double r = 1e-5, w = 10 * r, h = 2.5 * r;
+  std::vector<Eigen::Vector2d> ellipse, lens;
+  for (double scale : {1.0, 0.5})
+    for (int k = 0; k < 16; ++k)
+      ellipse.emplace_back(scale * w * std::cos(2 * kPi * k / 16), scale * h * std::sin(2 * kPi * k / 16));
+  const double R = (w * w + h * h) / (2 * h), half_angle = std::asin(w / R);
+  for (int side : {1, -1})
+    for (int k = 0; k <= 12; ++k) {
+      const double a = -half_angle + 2 * half_angle * k / 12;
+      lens.emplace_back(R * std::sin(a), side * (R * std::cos(a) - (R - h)));
+    }
+  auto turned = [](const std::vector<Eigen::Vector2d>& sites, double a) {
+    std::vector<Eigen::Vector2d> out;
+    for (const auto& p : sites)
+      out.emplace_back(std::cos(a) * p.x() - std::sin(a) * p.y(), std::sin(a) * p.x() + std::cos(a) * p.y());
+    return out;
+  };
+  for (double deg : {3.0, -20.0, 60.0}) {
+    const double a = deg * kPi / 180;
+    Case c = base_case();
+    add_straight_tow(c, "ell", TowSpec::Direction::Warp, 0, 0.0, turned(ellipse, a), r, 1e-3, 10);
+    add_straight_tow(c, "len", TowSpec::Direction::Weft, 0, 0.0, turned(lens, a), r, 1e-3, 10);
+    add_fiber(c, "a.f0", Vec3(-0.5e-3, -0.5e-3, 0), Vec3(-0.5e-3, 0.5e-3, 0), r, 4);  // a second weft
+    add_fiber(c, "b.f0", Vec3(-0.5e-3, 0.4e-3, 0), Vec3(0.5e-3, 0.4e-3, 0), r, 4);    // a second warp
+    add_tow(c, "a", TowSpec::Direction::Weft, 1, {"a.f0"});
+    add_tow(c, "b", TowSpec::Direction::Warp, 1, {"b.f0"});
+    const Model model = build_model(c);
+    const FabricReport rep = fabric_report(c, model, model.reference);
+    ASSERT_EQ(rep.tows.size(), 4u);
+    for (int t : {0, 1}) {
+      SCOPED_TRACE(rep.tows[t].name + " turned by " + std::to_string(deg) + " deg");
+      EXPECT_NEAR(rep.tows[t].mid.tilt, a, 1e-12);
+      EXPECT_NEAR(rep.tows[t].crossing.tilt, a, 1e-12);
+      const TowSectionReport at_mid = tow_section(model, model.reference, c.tows[t], rep.tows[t].mid.position);
+      EXPECT_EQ(at_mid.fibers, rep.tows[t].mid.fibers);
+      EXPECT_NEAR(at_mid.position, rep.tows[t].mid.position, 1e-18);
+      EXPECT_NEAR(at_mid.tilt, rep.tows[t].mid.tilt, 1e-15);
+      EXPECT_NEAR(at_mid.area, rep.tows[t].mid.area, 1e-12 * at_mid.area);
+      EXPECT_NEAR(at_mid.width, rep.tows[t].mid.width, 1e-15);
+      EXPECT_NEAR(at_mid.thickness, rep.tows[t].mid.thickness, 1e-15);
+      EXPECT_NEAR(at_mid.center_z, rep.tows[t].mid.center_z, 1e-15);
+    }
+    // One fiber: no axis.
+    EXPECT_TRUE(std::isnan(rep.tows[2].crossing.tilt));
+    EXPECT_TRUE(std::isnan(tow_section(model, model.reference, c.tows[3], 0.0).tilt));
+  }
+  // Beyond the fibers' ends: nothing cut.
+  Case c = base_case();
+  add_straight_tow(c, "ell", TowSpec::Direction::Warp, 0, 0.0, ellipse, r, 1e-3, 10);
+  const Model model = build_model(c);
+  const TowSectionReport none = tow_section(model, model.reference, c.tows[0], 2e-3);
+  EXPECT_EQ(none.fibers, 0);
+  EXPECT_TRUE(std::isnan(none.tilt));
+  EXPECT_TRUE(std::isnan(none.width));
 }
 
 TEST(FabricReport, HandWoven2x2ThicknessShrinkageAndMarginsExcluded) {
@@ -385,7 +450,7 @@ TEST(FabricReport, JsonHoldsEveryQuantity) {
   EXPECT_EQ(t["name"], "warp0");
   EXPECT_EQ(t["direction"], "warp");
   EXPECT_NEAR(t["crimp"].get<double>(), 0.0, 1e-13);
-  for (const char* key : {"position", "fibers", "width", "thickness", "area", "volume_fraction", "center_z"}) {
+  for (const char* key : {"position", "fibers", "width", "thickness", "area", "volume_fraction", "center_z", "tilt"}) {
     EXPECT_TRUE(t["mid_section"].contains(key)) << key;
     EXPECT_TRUE(t["crossing_section"].contains(key)) << key;
   }

@@ -163,7 +163,7 @@ TowSectionReport section_geometry(const std::vector<Eigen::Vector2d>& centres, d
   TowSectionReport s;
   s.fibers = static_cast<int>(centres.size());
   if (centres.empty()) {
-    s.width = s.thickness = s.area = s.volume_fraction = s.center_z = kNaN;
+    s.width = s.thickness = s.area = s.volume_fraction = s.center_z = s.tilt = kNaN;
     return s;
   }
   Eigen::Vector2d lo = centres[0], hi = centres[0], mean = Eigen::Vector2d::Zero();
@@ -175,6 +175,15 @@ TowSectionReport section_geometry(const std::vector<Eigen::Vector2d>& centres, d
   s.width = hi.x() - lo.x() + 2.0 * radius;
   s.thickness = hi.y() - lo.y() + 2.0 * radius;
   s.center_z = mean.y();
+  // Principal axis of the centres' second moments about their mean.
+  double cuu = 0.0, czz = 0.0, cuz = 0.0;
+  for (const auto& p : centres) {
+    const Eigen::Vector2d d = p - mean;
+    cuu += d.x() * d.x();
+    czz += d.y() * d.y();
+    cuz += d.x() * d.y();
+  }
+  s.tilt = centres.size() < 2 ? kNaN : 0.5 * std::atan2(2.0 * cuz, cuu - czz);
   // Convex hull (Andrew's monotone chain, collinear points dropped).
   std::vector<Eigen::Vector2d> p = centres;
   std::sort(p.begin(), p.end(), [](const Eigen::Vector2d& u, const Eigen::Vector2d& v) {
@@ -209,6 +218,28 @@ TowSectionReport section_geometry(const std::vector<Eigen::Vector2d>& centres, d
   }
   s.area = std::abs(area) + perimeter * radius + std::numbers::pi * radius * radius;
   s.volume_fraction = fiber_area / s.area;
+  return s;
+}
+
+TowSectionReport tow_section(const Model& model, const VecX& q, const TowSpec& tow, double position) {
+  const int axis = tow.direction == TowSpec::Direction::Warp ? 0 : 1, across = 1 - axis;
+  const std::vector<double> plane{position};
+  std::vector<Vec3> cut;
+  std::vector<Eigen::Vector2d> centres;
+  double area = 0.0, r = 0.0;
+  for (const std::string& name : tow.fibers) {
+    const int fi = model.fiber_index(name);
+    if (fi < 0) continue;
+    const Fiber& f = model.fibers[fi];
+    cut_fiber(model, q, f, axis, plane, cut);
+    if (std::isnan(cut[0].x())) continue;
+    const Section& sec = model.sections[f.section];
+    centres.emplace_back(cut[0][across], cut[0].z());
+    area += std::numbers::pi * sec.a * sec.b;
+    r += std::sqrt(sec.a * sec.b);
+  }
+  TowSectionReport s = section_geometry(centres, centres.empty() ? 0.0 : r / centres.size(), area);
+  s.position = position;
   return s;
 }
 
@@ -413,10 +444,10 @@ FabricReport fabric_report(const Case& c, const Model& model, const VecX& q,
 nlohmann::json to_json(const FabricReport& r) {
   auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   auto section = [&](const TowSectionReport& s) {
-    return nlohmann::json{{"position", num(s.position)},   {"fibers", s.fibers},
-                          {"width", num(s.width)},         {"thickness", num(s.thickness)},
-                          {"area", num(s.area)},           {"volume_fraction", num(s.volume_fraction)},
-                          {"center_z", num(s.center_z)}};
+    return nlohmann::json{{"position", num(s.position)}, {"fibers", s.fibers},
+                          {"width", num(s.width)},       {"thickness", num(s.thickness)},
+                          {"area", num(s.area)},         {"volume_fraction", num(s.volume_fraction)},
+                          {"center_z", num(s.center_z)}, {"tilt", num(s.tilt)}};
   };
   nlohmann::json tows = nlohmann::json::array();
   for (const TowReport& t : r.tows)

@@ -26,6 +26,11 @@ struct TowSectionReport {
   double area = 0;             ///< convex hull of the centres grown by r: A + P r + pi r^2 [m^2]
   double volume_fraction = 0;  ///< sum of the cut fibers' section areas / area [-]
   double center_z = 0;         ///< mean z of the cut centres [m]
+  /// Angle from the fabric plane of the principal (major) axis of the cut centres' second
+  /// moments, about the tow axis, in (-pi/2, pi/2]: positive when the section rises towards
+  /// +across (+y for a warp, +x for a weft). A section symmetric about a vertical line has 0
+  /// (pi/2 if its centres spread more in z than across); NaN with fewer than 2 fibers [rad].
+  double tilt = 0;
 };
 
 /// One tow ([[tow]] or generated).
@@ -65,6 +70,11 @@ struct FabricReport {
 /// cut [m], `radius` the fiber radius used to grow them [m], `fiber_area` the sum of the cut
 /// fibers' section areas [m^2]. Sets every field but `position`.
 TowSectionReport section_geometry(const std::vector<Eigen::Vector2d>& centres, double radius, double fiber_area);
+
+/// The section of `tow` (its fibers meshed in `model`; one absent from the model is ignored) at
+/// state `q`, cut by the plane normal to its axis at `position` along it (x of a warp, y of a
+/// weft): the cut and the measures of the report's sections, at any plane.
+TowSectionReport tow_section(const Model& model, const VecX& q, const TowSpec& tow, double position);
 
 /// The report of the tows of `c` (c.tows, fibers meshed in `model`) at state `q` (all dofs,
 /// bodies included). `contacts` and `responses` (same length) are optional: without them
