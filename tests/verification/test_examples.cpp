@@ -41,6 +41,20 @@ TEST(Examples, ThereAreExamples) {
             cases.end());
 }
 
+// The cases of bench/cases (solver measurements, docs/performance.md) stay readable and build.
+TEST(Examples, BenchCasesBuild) {
+  int read = 0;
+  for (const auto& entry : fs::directory_iterator(fs::path(FIBRA_SOURCE_DIR) / "bench" / "cases")) {
+    if (entry.path().extension() != ".toml") continue;
+    SCOPED_TRACE(entry.path().string());
+    const Case c = read_case(entry.path().string());
+    const Model model = build_model(c);
+    EXPECT_GT(model.fibers.size(), 0u);
+    ++read;
+  }
+  EXPECT_GE(read, 1);
+}
+
 // The columns of a CSV file with one header line: name -> values ("nan" reads as NaN).
 std::map<std::string, std::vector<double>> read_columns(const fs::path& file) {
   std::map<std::string, std::vector<double>> out;

@@ -796,24 +796,10 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
           m_relax_settling = loaded && m_relax_residual <= opt.relax_tolerance;
         }
         // Easy increments: the drag falls, faster the easier they were.
-        const double drag_before = m_relax_drag;
         if (iterations <= 12)
           m_relax_drag = std::max(0.25 * m_relax_drag, relax_min);
         else if (iterations <= 30)
           m_relax_drag = std::max(0.5 * m_relax_drag, relax_min);
-        // ... but not so far that the next increment would move a node by more than a quarter
-        // of the smallest radius (half the Newton step limit). A fiber that nothing holds yet
-        // (a loose fiber at a tow's edge) moves by about its out-of-balance force over the
-        // drag; with the drag cut by 4 it wanted several radii in one increment, its Newton
-        // steps ran into neighbours not yet in contact, and the increment failed (the
-        // 480-fiber relax: 25 iterations lost at every retry of the lower drag). Not after a
-        // test's load level, whose motion is imposed (the edges pulled or sheared).
-        if (m_max_step > 0.0 && (!test || step_dl == 0.0)) {
-          double moved = 0.0;
-          for (Index d = 0; d < m_q.size(); ++d)
-            moved = std::max(moved, std::abs(m_q[d] - m_q_start[d]) * m_length_scale[d]);
-          m_relax_drag = std::min(std::max(m_relax_drag, drag_before * moved / (0.5 * m_max_step)), relax_max);
-        }
       }
       lambda += step_dl;
       if (1.0 - lambda < 1e-12) lambda = 1.0;
