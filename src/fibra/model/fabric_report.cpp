@@ -157,6 +157,18 @@ double middle_gap(const std::vector<double>& axes) {
   return 0.5 * (axes[k] + axes[k + 1]);
 }
 
+/// The fibers cut by one plane, gathered for section_geometry: centres (across, z), their
+/// section areas and radii.
+struct SectionCut {
+  std::vector<Eigen::Vector2d> centres;
+  double area = 0.0, radius_sum = 0.0;
+  void add(const Eigen::Vector2d& centre, const Section& sec) {
+    centres.push_back(centre);
+    area += std::numbers::pi * sec.a * sec.b;
+    radius_sum += std::sqrt(sec.a * sec.b);
+  }
+};
+
 }  // namespace
 
 TowSectionReport section_geometry(const std::vector<Eigen::Vector2d>& centres, double radius, double fiber_area) {
@@ -221,26 +233,29 @@ TowSectionReport section_geometry(const std::vector<Eigen::Vector2d>& centres, d
   return s;
 }
 
+namespace {
+/// section_geometry of a gathered cut (the mean radius of its fibers), at `position`.
+TowSectionReport cut_report(const SectionCut& cut, double position) {
+  const size_t n = cut.centres.size();
+  TowSectionReport s = section_geometry(cut.centres, n == 0 ? 0.0 : cut.radius_sum / n, cut.area);
+  s.position = position;
+  return s;
+}
+}  // namespace
+
 TowSectionReport tow_section(const Model& model, const VecX& q, const TowSpec& tow, double position) {
   const int axis = tow.direction == TowSpec::Direction::Warp ? 0 : 1, across = 1 - axis;
   const std::vector<double> plane{position};
   std::vector<Vec3> cut;
-  std::vector<Eigen::Vector2d> centres;
-  double area = 0.0, r = 0.0;
+  SectionCut section;
   for (const std::string& name : tow.fibers) {
     const int fi = model.fiber_index(name);
     if (fi < 0) continue;
     const Fiber& f = model.fibers[fi];
     cut_fiber(model, q, f, axis, plane, cut);
-    if (std::isnan(cut[0].x())) continue;
-    const Section& sec = model.sections[f.section];
-    centres.emplace_back(cut[0][across], cut[0].z());
-    area += std::numbers::pi * sec.a * sec.b;
-    r += std::sqrt(sec.a * sec.b);
+    if (!std::isnan(cut[0].x())) section.add({cut[0][across], cut[0].z()}, model.sections[f.section]);
   }
-  TowSectionReport s = section_geometry(centres, centres.empty() ? 0.0 : r / centres.size(), area);
-  s.position = position;
-  return s;
+  return cut_report(section, position);
 }
 
 FabricReport fabric_report(const Case& c, const Model& model, const VecX& q,
@@ -357,8 +372,7 @@ FabricReport fabric_report(const Case& c, const Model& model, const VecX& q,
 
     std::vector<double> zsum(samples, 0.0);
     std::vector<int> zcount(samples, 0);
-    std::vector<Eigen::Vector2d> mid_centres, cross_centres;
-    double mid_area = 0.0, cross_area = 0.0, mid_r = 0.0, cross_r = 0.0;
+    SectionCut mid, crossing;
     for (int fi : tw.fibers) {
       const Fiber& f = model.fibers[fi];
       cut_fiber(model, q, f, tw.axis, sorted, cut);
@@ -371,14 +385,8 @@ FabricReport fabric_report(const Case& c, const Model& model, const VecX& q,
         if (which < samples) {
           zsum[which] += x.z();
           ++zcount[which];
-        } else if (m >= 2 && which == samples) {
-          mid_centres.push_back(centre);
-          mid_area += std::numbers::pi * sec.a * sec.b;
-          mid_r += std::sqrt(sec.a * sec.b);
         } else {
-          cross_centres.push_back(centre);
-          cross_area += std::numbers::pi * sec.a * sec.b;
-          cross_r += std::sqrt(sec.a * sec.b);
+          (m >= 2 && which == samples ? mid : crossing).add(centre, sec);
         }
       }
     }
@@ -391,11 +399,8 @@ FabricReport fabric_report(const Case& c, const Model& model, const VecX& q,
         }
       tr.z_amplitude = b >= a ? b - a : kNaN;
     }
-    tr.mid = section_geometry(mid_centres, mid_centres.empty() ? 0.0 : mid_r / mid_centres.size(), mid_area);
-    tr.mid.position = mid_at;
-    tr.crossing =
-        section_geometry(cross_centres, cross_centres.empty() ? 0.0 : cross_r / cross_centres.size(), cross_area);
-    tr.crossing.position = cross_at;
+    tr.mid = cut_report(mid, mid_at);
+    tr.crossing = cut_report(crossing, cross_at);
     fractions.push_back(tr.mid.volume_fraction);
     fractions.push_back(tr.crossing.volume_fraction);
     (tr.direction == TowSpec::Direction::Warp ? warp_crimps : weft_crimps).push_back(tr.crimp);
