@@ -201,7 +201,7 @@ struct SolverSpec {
   std::string ordering = "metis";         ///< CHOLMOD fill-reducing ordering: "metis", "amd" or "auto"
   double weave_drag = 1.0;                ///< drag per node in weave steps, relative to the contact penalty
   double relax_drag = 1e-2;               ///< initial proximal drag per node in relax steps, relative to it
-  double drag_axial = 1e-2;               ///< weave steps' drag: weight of a node's motion along its fiber (1: isotropic)
+  double drag_axial = 1e-2;               ///< weave, relax and test steps' drag: weight of a node's motion along its fiber (1: isotropic)
   double relax_tolerance = 1e-4;          ///< relax steps end when the drag's force is below this (relative)
   double test_tolerance = 1e-4;           ///< biaxial/shear: a load level is an equilibrium when the drag's force is below this (relative)
   double pseudo_tolerance = 1e-6;         ///< Newton tolerance of pseudo-time increments (weave; relax/test while the drag force is above its tolerance)

@@ -148,6 +148,7 @@ StaticSolver::StaticSolver(const Case& c, const Model& model)
     m_max_step = std::max(0.0, c.solver.max_step);
   }
   m_q_start = m_q;
+  m_newton_tolerance = c.solver.residual_tolerance;
   m_linear->analyze(m_problem->pattern());
 }
 
@@ -417,7 +418,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     residual = std::sqrt(res) / fref;
     history.push_back(residual);
     if (!std::isfinite(residual)) return false;
-    const double tolerance = std::max(m_newton_tolerance, opt.residual_tolerance);
+    const double tolerance = m_newton_tolerance;
     const bool small_step =
         last_step <= opt.displacement_tolerance * (tolerance / opt.residual_tolerance) * length;
     // Converged: residual and correction small; or no correction needed at all.
@@ -770,13 +771,13 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
                 "step \"{}\": stopped at load factor {:.6g} after {} increments tried (max_increments {}); the last "
                 "one, to {:.6g}, did not converge ({} Newton iterations, last relative residual {:.3e}, tolerance {:.1e})",
                 st.name, lambda, attempts, max_increments, lambda + step_dl, iterations,
-                history.empty() ? 0.0 : history.back(), std::max(m_newton_tolerance, opt.residual_tolerance));
+                history.empty() ? 0.0 : history.back(), m_newton_tolerance);
           else
             result.message = fmt::format(
                 "step \"{}\": the increment from load factor {:.6g} to {:.6g} did not converge after {} cuts "
                 "({} Newton iterations, last relative residual {:.3e}, tolerance {:.1e})",
                 st.name, lambda, lambda + dl, cuts_here, iterations, history.empty() ? 0.0 : history.back(),
-                std::max(m_newton_tolerance, opt.residual_tolerance));
+                m_newton_tolerance);
           return result;
         }
         if (!stiffer) dl *= 0.5;

@@ -145,7 +145,7 @@ class StaticSolver {
   PcgWorkspace m_pcg;             // conjugate gradients' work vectors
   bool m_relax_settling = false;  // relax steps: the drag is negligible, normals iterated to their fixed point
   double m_reference_force = 0;  // reference force of the last Newton iteration [N]
-  double m_newton_tolerance = 0;  // residual tolerance of the current increment's Newton solves (relative)
+  double m_newton_tolerance = 0;  // residual tolerance of the current Newton solves (relative; >= residual_tolerance)
   double m_relax_residual = 0;   // relax steps: drag force at the end of the last increment, relative
   SolverStats m_stats;
   std::function<void(const std::string&)> m_progress;
