@@ -540,6 +540,13 @@ class Reader {
     return x;
   }
 
+  /// A relative tolerance in (0, 1); `relative_to` says what it is relative to (for the message).
+  double fraction(const Value& v, const std::string& key, const char* relative_to) const {
+    const double x = to_number(v, key);
+    if (!(x > 0 && x < 1)) fail(key, fmt::format("expected a number in (0, 1) (relative to {}), got {}", relative_to, x), &v);
+    return x;
+  }
+
   /// An array of 3 components, each a number (prescribed) or "free" (std::nullopt).
   std::array<std::optional<double>, 3> to_components(const Value& v, const std::string& key) const {
     const std::string expected = "expected an array of 3 components, each a number or \"free\"";
@@ -1641,35 +1648,21 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
     if (!(s.drag_axial > 0 && s.drag_axial <= 1))
       fail(key, fmt::format("expected a number in (0, 1] (the drag along a fiber relative to across it), got {}", s.drag_axial), v);
   }
-  if (const Value* v = find(t, "test_tolerance")) {
-    const std::string key = join(path, "test_tolerance");
-    s.test_tolerance = to_number(*v, key);
-    if (!(s.test_tolerance > 0 && s.test_tolerance < 1))
-      fail(key, fmt::format("expected a number in (0, 1) (relative to the reference force), got {}", s.test_tolerance), v);
-  }
+  if (const Value* v = find(t, "test_tolerance"))
+    s.test_tolerance = fraction(*v, join(path, "test_tolerance"), "the reference force");
   if (const Value* v = find(t, "relax_tolerance")) {
     const std::string key = join(path, "relax_tolerance");
     s.relax_tolerance = to_number(*v, key);
     if (!(s.relax_tolerance > 0))
       fail(key, fmt::format("expected a number > 0 (relative to the reference force), got {}", s.relax_tolerance), v);
   }
-  if (const Value* v = find(t, "pseudo_tolerance")) {
-    const std::string key = join(path, "pseudo_tolerance");
-    s.pseudo_tolerance = to_number(*v, key);
-    if (!(s.pseudo_tolerance > 0 && s.pseudo_tolerance < 1))
-      fail(key, fmt::format("expected a number in (0, 1) (relative to the reference force), got {}", s.pseudo_tolerance),
-           v);
-  }
+  if (const Value* v = find(t, "pseudo_tolerance"))
+    s.pseudo_tolerance = fraction(*v, join(path, "pseudo_tolerance"), "the reference force");
   if (const Value* v = find(t, "krylov_iterations")) {
     s.krylov_iterations = to_int(*v, join(path, "krylov_iterations"), 0);
   }
-  if (const Value* v = find(t, "krylov_tolerance")) {
-    const std::string key = join(path, "krylov_tolerance");
-    s.krylov_tolerance = to_number(*v, key);
-    if (!(s.krylov_tolerance > 0 && s.krylov_tolerance < 1))
-      fail(key, fmt::format("expected a number in (0, 1) (relative to the Newton residual), got {}", s.krylov_tolerance),
-           v);
-  }
+  if (const Value* v = find(t, "krylov_tolerance"))
+    s.krylov_tolerance = fraction(*v, join(path, "krylov_tolerance"), "the Newton residual");
   if (const Value* v = find(t, "max_step")) {
     const std::string key = join(path, "max_step");
     s.max_step = to_number(*v, key);
