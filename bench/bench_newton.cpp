@@ -147,8 +147,8 @@ BENCHMARK(BM_AssemblyGradient)->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime(
 
 // The drag of weave, relax and test steps on its own (Problem::drag_force_norm evaluates its
 // gradient alone, as the solver does once per relax increment) and in the assembly of E + g + H
-// with it, one thread: isotropic (axial weight 1, relax and test steps) and weak along the
-// fibers (0.01: weave, relax and test steps). Its cost beside BM_Assembly/threads:1 is the drag's per-node loop.
+// with it, one thread: isotropic (axial weight 1) and weak along the fibers (0.01, the default
+// of weave, relax and test steps). Its cost beside BM_Assembly/threads:1 is the drag's per-node loop.
 void BM_AssemblyWithDrag(benchmark::State& state) {
   Bundle& b = bundle();
   OmpThreads omp(1);
