@@ -178,6 +178,31 @@ int ContactManager::adapt_penalty(std::vector<ContactElement>& contacts,
   return raised;
 }
 
+int ContactManager::soften_penalty(std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses,
+                                   double floor) const {
+  std::map<int, double> worst;  // zone -> largest penetration / allowed
+  for (size_t k = 0; k < contacts.size(); ++k) {
+    const double ratio = -responses[k].gap / (m_spec.max_penetration * pair_radius(contacts[k]));
+    auto [it, inserted] = worst.try_emplace(contacts[k].zone, ratio);
+    if (!inserted) it->second = std::max(it->second, ratio);
+  }
+  int softened = 0;
+  std::map<int, double> factor;
+  for (auto& [zone, ratio] : worst)
+    if (ratio < 0.35) factor[zone] = std::max(0.25, ratio / 0.7);
+  std::map<int, bool> counted;
+  for (ContactElement& c : contacts) {
+    auto it = factor.find(c.zone);
+    if (it == factor.end() || c.law.stiffness <= floor) continue;
+    c.law.stiffness = std::max(floor, c.law.stiffness * it->second);
+    if (!counted[c.zone]) {
+      counted[c.zone] = true;
+      ++softened;
+    }
+  }
+  return softened;
+}
+
 void ContactManager::commit(std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses,
                             const VecX& q) const {
   for (size_t k = 0; k < contacts.size(); ++k) {

@@ -25,6 +25,7 @@ struct ContactStats {
   int detections = 0;                ///< detection loops of the increment
   int normal_updates = 0;            ///< normal-update loops of the increment
   int penalty_raises = 0;            ///< zones whose penalty was raised in the increment
+  int penalty_softenings = 0;        ///< zones whose penalty was lowered at the end of the increment
 };
 
 /// Contact state across increments.
@@ -51,6 +52,11 @@ class ContactManager {
   /// Raises the penalty of every zone whose largest penetration exceeds the allowed one; returns
   /// the number of zones raised.
   int adapt_penalty(std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses) const;
+  /// The other way: a zone whose deepest penetration is below 35 % of the allowed one gets its
+  /// penalty lowered towards 70 % of it (by at most 4 per call, never below `floor`). Returns
+  /// the zones softened.
+  int soften_penalty(std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses,
+                     double floor) const;
   /// Stores the converged friction forces and separations as history.
   void commit(std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses,
               const VecX& q) const;

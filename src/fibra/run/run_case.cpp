@@ -47,8 +47,8 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   std::vector<std::string> columns = solver.reaction_columns();
   const std::vector<std::string> contact_columns = {
       "contact:zones",       "contact:elements",   "contact:max_penetration_ratio", "contact:normal_force",
-      "contact:detections",  "contact:normal_updates", "contact:penalty_raises",    "contact:detection_time",
-      "contact:solve_time"};
+      "contact:detections",  "contact:normal_updates", "contact:penalty_raises",    "contact:penalty_softenings",
+      "contact:detection_time", "contact:solve_time"};
   if (solver.has_contact()) columns.insert(columns.end(), contact_columns.begin(), contact_columns.end());
   const BodySystem* bodies = solver.bodies();
   if (bodies) columns.insert(columns.end(), {"binding:updates", "binding:max_violation"});
@@ -144,7 +144,8 @@ RunReport run_case(const Case& c, const RunOptions& options) {
       const ContactStats& cs = info.contact;
       row.extra.insert(row.extra.end(),
                        {double(cs.zones), double(cs.elements), cs.max_penetration_ratio, cs.total_normal_force,
-                        double(cs.detections), double(cs.normal_updates), double(cs.penalty_raises), cs.detection_time,
+                        double(cs.detections), double(cs.normal_updates), double(cs.penalty_raises),
+                        double(cs.penalty_softenings), cs.detection_time,
                         info.increment_time - cs.detection_time});
     }
     if (bodies) row.extra.insert(row.extra.end(), {double(info.binding_updates), info.binding_violation});
@@ -304,6 +305,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                  {"krylov_iterations", s.krylov_iterations},
                  {"line_search_trials", s.line_search_trials},
                  {"roundoff_convergences", s.roundoff_convergences},
+                 {"limited_steps", s.limited_steps},
                  {"binding_updates", s.binding_updates},
                  {"factor_nonzeros", s.factor_nonzeros}};
   writer.write_summary(j);
