@@ -735,6 +735,10 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     const double k0 = m_contact ? m_contact->initial_stiffness() : 0.0;
     const double relax_max = std::max(opt.weave_drag, opt.relax_drag) * k0, relax_min = 1e-9 * k0;
     m_relax_drag = relax ? opt.relax_drag * k0 : 0.0;
+    // Twice the last drag that failed, decaying by 0.7 per accepted increment: the drag does
+    // not fall straight back to a level that just failed (each failure costs a whole Newton
+    // solve; on the 480-fiber relax the drag went 35 (failed), 141 (failed), 563, then 141 again).
+    double failed_floor = 0.0;
     m_relax_settling = false;
     bool relaxed = !relax;
     while (lambda < 1.0 - 1e-12 || !relaxed) {
@@ -766,7 +770,10 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         ++m_stats.cuts;
         // Relax: a stiffer drag first (at lambda = 1 nothing else can be cut).
         const bool stiffer = relax && m_relax_drag < relax_max;
-        if (relax) m_relax_drag = std::min(4.0 * m_relax_drag, relax_max);
+        if (relax) {
+          failed_floor = std::max(failed_floor, 2.0 * m_relax_drag);
+          m_relax_drag = std::min(4.0 * m_relax_drag, relax_max);
+        }
         const int cuts_here = dl > 0.0 ? static_cast<int>(std::round(std::log2(nominal / dl))) : opt.max_cuts;
         if ((cuts_here >= opt.max_cuts && !stiffer) || attempts >= max_increments) {
           result.status = RunResult::Status::Failed;
@@ -809,6 +816,8 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
           m_relax_drag = std::max(0.25 * m_relax_drag, relax_min);
         else if (iterations <= 30)
           m_relax_drag = std::max(0.5 * m_relax_drag, relax_min);
+        m_relax_drag = std::max(m_relax_drag, std::min(failed_floor, relax_max));
+        failed_floor *= 0.7;
       }
       lambda += step_dl;
       if (1.0 - lambda < 1e-12) lambda = 1.0;
