@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <set>
 
 #include <fmt/core.h>
 
@@ -180,27 +181,21 @@ int ContactManager::adapt_penalty(std::vector<ContactElement>& contacts,
 
 int ContactManager::soften_penalty(std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses,
                                    double floor) const {
-  std::map<int, double> worst;  // zone -> largest penetration / allowed
+  std::map<int, double> factor;  // zone -> largest penetration / allowed, then its penalty factor
   for (size_t k = 0; k < contacts.size(); ++k) {
     const double ratio = -responses[k].gap / (m_spec.max_penetration * pair_radius(contacts[k]));
-    auto [it, inserted] = worst.try_emplace(contacts[k].zone, ratio);
+    auto [it, inserted] = factor.try_emplace(contacts[k].zone, ratio);
     if (!inserted) it->second = std::max(it->second, ratio);
   }
-  int softened = 0;
-  std::map<int, double> factor;
-  for (auto& [zone, ratio] : worst)
-    if (ratio < 0.35) factor[zone] = std::max(0.25, ratio / 0.7);
-  std::map<int, bool> counted;
+  for (auto& [zone, f] : factor) f = f < 0.35 ? std::max(0.25, f / 0.7) : 1.0;
+  std::set<int> softened;
   for (ContactElement& c : contacts) {
-    auto it = factor.find(c.zone);
-    if (it == factor.end() || c.law.stiffness <= floor) continue;
-    c.law.stiffness = std::max(floor, c.law.stiffness * it->second);
-    if (!counted[c.zone]) {
-      counted[c.zone] = true;
-      ++softened;
-    }
+    const double f = factor.at(c.zone);
+    if (f >= 1.0 || c.law.stiffness <= floor) continue;
+    c.law.stiffness = std::max(floor, c.law.stiffness * f);
+    softened.insert(c.zone);
   }
-  return softened;
+  return static_cast<int>(softened.size());
 }
 
 void ContactManager::commit(std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses,

@@ -330,7 +330,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       // far less than allowed: the weave leaves penalties raised up to ~100 k0 to push the tows
       // through each other (median 30 k0 on the 3 x 3 x 16 bench case), 30 times stiffer than
       // the settled fabric needs, and such stiff contacts make every Newton solve of the relax
-      // harder (docs/theory/contact.md, "Penalty"). Softened zones stay above the initial
+      // harder (docs/theory/contact.md, "Softening"). Softened zones stay above the initial
       // penalty; like the raises, the change acts from the next increment.
       if (lagged && !weave)
         m_contact_stats.penalty_softenings += m_contact->soften_penalty(m_problem->contacts(), responses, k0);
