@@ -7,9 +7,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -527,6 +529,38 @@ increments = 2
       }
   }
   EXPECT_EQ(matched, 2);
+
+  // The drag columns: the weave's drag is one constant; the relax starts from relax_drag = 1e-2
+  // of the initial penalty (weave_drag: 1) and adapts; the test's levels are dragged
+  // too and their last increments settle below the test tolerance.
+  hin.clear();
+  hin.seekg(0);
+  std::getline(hin, header);
+  const size_t drag = column("relax:drag"), force = column("relax:drag_residual"), step = column("step");
+  ASSERT_LT(drag, columns.size());
+  ASSERT_LT(force, columns.size());
+  std::map<std::string, std::vector<double>> drags, forces;
+  while (std::getline(hin, line)) {
+    const std::vector<std::string> h = split_csv(line);
+    if (h.size() != columns.size()) continue;
+    drags[h[step]].push_back(std::stod(h[drag]));
+    forces[h[step]].push_back(std::stod(h[force]));
+  }
+  ASSERT_FALSE(drags["weave"].empty());
+  ASSERT_FALSE(drags["relax"].empty());
+  ASSERT_FALSE(drags["pull"].empty());
+  for (double d : drags["weave"]) EXPECT_DOUBLE_EQ(d, drags["weave"].front());
+  EXPECT_GT(drags["weave"].front(), 0.0);
+  // relax_drag x k0, quadrupled once per failed attempt before the first accepted increment.
+  const double tries = std::log(drags["relax"].front() / (1e-2 * drags["weave"].front())) / std::log(4.0);
+  EXPECT_NEAR(tries, std::round(tries), 1e-9);
+  EXPECT_GE(std::round(tries), 0.0);
+  for (double d : drags["relax"]) EXPECT_GT(d, 0.0);
+  for (double d : drags["pull"]) EXPECT_GT(d, 0.0);
+  for (double f : forces["weave"]) EXPECT_EQ(f, 0.0);
+  EXPECT_LE(forces["relax"].back(), 1e-4);
+  EXPECT_LE(forces["pull"].back(), 1e-4);
+
   const nlohmann::json s = nlohmann::json::parse(slurp(out / "summary.json"));
   ASSERT_TRUE(s.contains("curves")) << s.dump();
   EXPECT_EQ(s["curves"][0]["file"], "curves_pull.csv");

@@ -52,11 +52,12 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   if (solver.has_contact()) columns.insert(columns.end(), contact_columns.begin(), contact_columns.end());
   const BodySystem* bodies = solver.bodies();
   if (bodies) columns.insert(columns.end(), {"binding:updates", "binding:max_violation"});
-  // Relax steps: the drag force left at the end of each increment (0 in other steps).
-  const bool relax = solver.has_contact() && std::any_of(c.steps.begin(), c.steps.end(), [](const StepSpec& st) {
-                       return st.kind == StepSpec::Kind::Relax;
-                     });
-  if (relax) columns.push_back("relax:drag_residual");
+  // Steps with a drag (weave, relax, biaxial, shear): the drag stiffness of each increment and
+  // the drag force left at its end (0 in other steps).
+  const bool dragged = solver.has_contact() && std::any_of(c.steps.begin(), c.steps.end(), [](const StepSpec& st) {
+                         return st.kind == StepSpec::Kind::Weave || st.is_proximal();
+                       });
+  if (dragged) columns.insert(columns.end(), {"relax:drag_residual", "relax:drag"});
   // Woven samples: the fabric report (model/fabric_report.hpp) per increment, O(nodes).
   const bool fabric = !c.tows.empty();
   if (fabric) columns.insert(columns.end(), {"fabric:warp_crimp", "fabric:weft_crimp", "fabric:thickness"});
@@ -149,7 +150,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                         info.increment_time - cs.detection_time});
     }
     if (bodies) row.extra.insert(row.extra.end(), {double(info.binding_updates), info.binding_violation});
-    if (relax) row.extra.push_back(info.relax_residual);
+    if (dragged) row.extra.insert(row.extra.end(), {info.relax_residual, info.drag});
     if (rep) row.extra.insert(row.extra.end(), {rep->warp_crimp, rep->weft_crimp, rep->thickness});
     if (rep && info.step_end) {
       const StepSpec::Kind kind = st.kind;

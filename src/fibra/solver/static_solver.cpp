@@ -798,6 +798,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         if (!stiffer) dl *= 0.5;
         continue;
       }
+      const double used_drag = m_problem->drag();
       if (relax) {
         // Drag force left at the end of the increment (scaled like the residual), relative to
         // the reference force.
@@ -837,6 +838,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       info.step_end = lambda >= 1.0 && relaxed;
       info.settled = level_settled;
       info.relax_residual = relax ? m_relax_residual : 0.0;
+      info.drag = used_drag;
       info.reactions = reactions(m_gradient);
       if (m_bodies) {
         info.binding_updates = m_binding_updates;

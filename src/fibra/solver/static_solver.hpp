@@ -40,7 +40,8 @@ struct IncrementInfo {
   int binding_updates = 0;        ///< augmented-Lagrangian multiplier updates
   int limited_steps = 0;          ///< Newton steps scaled down to the step limit in this increment
   double binding_violation = 0;   ///< largest binding condition |g| at the accepted state [m]
-  double relax_residual = 0;      ///< relax steps: the drag's force, relative to the reference force
+  double relax_residual = 0;      ///< relax and test steps: the drag's force, relative to the reference force
+  double drag = 0;                ///< drag stiffness per node the increment was solved with [N/m] (0 without drag)
 };
 
 /// Counters and timings of a run.
