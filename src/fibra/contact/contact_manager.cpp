@@ -158,35 +158,38 @@ double ContactManager::prescribe_normals(std::vector<ContactElement>& contacts, 
   return deepest;
 }
 
-int ContactManager::adapt_penalty(std::vector<ContactElement>& contacts,
-                                  const std::vector<ContactResponse>& responses) const {
-  std::map<int, double> worst;  // zone -> largest penetration / allowed
+std::map<int, double> ContactManager::zone_penetration(const std::vector<ContactElement>& contacts,
+                                                      const std::vector<ContactResponse>& responses) const {
+  std::map<int, double> worst;
   for (size_t k = 0; k < contacts.size(); ++k) {
-    const double allowed = m_spec.max_penetration * pair_radius(contacts[k]);
-    const double ratio = -responses[k].gap / allowed;
+    const double ratio = -responses[k].gap / (m_spec.max_penetration * pair_radius(contacts[k]));
     auto [it, inserted] = worst.try_emplace(contacts[k].zone, ratio);
     if (!inserted) it->second = std::max(it->second, ratio);
   }
+  return worst;
+}
+
+int ContactManager::adapt_penalty(std::vector<ContactElement>& contacts,
+                                  const std::vector<ContactResponse>& responses) const {
+  // Zone -> largest penetration / allowed, then its penalty factor. Penetration falls roughly
+  // as 1/k at a given force: aim at 70 % of the allowed one.
+  std::map<int, double> factor = zone_penetration(contacts, responses);
   int raised = 0;
-  for (auto& [zone, ratio] : worst) {
-    if (ratio <= 1.0) continue;
+  for (auto& [zone, f] : factor) {
+    if (f <= 1.0) {
+      f = 1.0;
+      continue;
+    }
     ++raised;
-    // Penetration falls roughly as 1/k at a given force: aim at 70 % of the allowed one.
-    const double factor = std::min(100.0, ratio / 0.7);
-    for (ContactElement& c : contacts)
-      if (c.zone == zone) c.law.stiffness *= factor;
+    f = std::min(100.0, f / 0.7);
   }
+  for (ContactElement& c : contacts) c.law.stiffness *= factor.at(c.zone);
   return raised;
 }
 
 int ContactManager::soften_penalty(std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses,
                                    double floor) const {
-  std::map<int, double> factor;  // zone -> largest penetration / allowed, then its penalty factor
-  for (size_t k = 0; k < contacts.size(); ++k) {
-    const double ratio = -responses[k].gap / (m_spec.max_penetration * pair_radius(contacts[k]));
-    auto [it, inserted] = factor.try_emplace(contacts[k].zone, ratio);
-    if (!inserted) it->second = std::max(it->second, ratio);
-  }
+  std::map<int, double> factor = zone_penetration(contacts, responses);  // then the penalty factor
   for (auto& [zone, f] : factor) f = f < 0.35 ? std::max(0.25, f / 0.7) : 1.0;
   std::set<int> softened;
   for (ContactElement& c : contacts) {

@@ -3,6 +3,7 @@
 /// detection (laws, history carried over), updates normals, adapts the penalty per proximity
 /// zone, and commits friction history at convergence.
 #include <functional>
+#include <map>
 #include <memory>
 #include <vector>
 
@@ -86,6 +87,9 @@ class ContactManager {
 
  private:
   double pair_radius(const ContactElement& c) const;  // smaller section radius of the pair
+  // Per zone, the largest penetration of its elements at `responses`, over the allowed one.
+  std::map<int, double> zone_penetration(const std::vector<ContactElement>& contacts,
+                                         const std::vector<ContactResponse>& responses) const;
   double arc_length(const Particle& p) const;         // reference arc length along its fiber
 
   const Model& m_model;
