@@ -536,15 +536,18 @@ increments = 2
   hin.clear();
   hin.seekg(0);
   std::getline(hin, header);
-  const size_t drag = column("relax:drag"), force = column("relax:drag_residual"), step = column("step");
+  const size_t drag = column("relax:drag"), force = column("relax:drag_residual"), step = column("step"),
+               its = column("iterations");
   ASSERT_LT(drag, columns.size());
   ASSERT_LT(force, columns.size());
   std::map<std::string, std::vector<double>> drags, forces;
+  std::vector<int> relax_its;
   while (std::getline(hin, line)) {
     const std::vector<std::string> h = split_csv(line);
     if (h.size() != columns.size()) continue;
     drags[h[step]].push_back(std::stod(h[drag]));
     forces[h[step]].push_back(std::stod(h[force]));
+    if (h[step] == "relax") relax_its.push_back(std::stoi(h[its]));
   }
   ASSERT_FALSE(drags["weave"].empty());
   ASSERT_FALSE(drags["relax"].empty());
@@ -558,15 +561,6 @@ increments = 2
   // After a failed attempt the drag stays above twice the drag that failed: an easy first
   // increment (at most 12 iterations) would quarter it, the floor holds it at half (times 4 per
   // failure of the second increment's own attempts); without failures, a quarter.
-  const size_t its = column("iterations");
-  std::vector<int> relax_its;
-  hin.clear();
-  hin.seekg(0);
-  std::getline(hin, header);
-  while (std::getline(hin, line)) {
-    const std::vector<std::string> h = split_csv(line);
-    if (h.size() == columns.size() && h[step] == "relax") relax_its.push_back(std::stoi(h[its]));
-  }
   ASSERT_GE(drags["relax"].size(), 2u);
   if (relax_its.front() <= 12) {
     const double expected = drags["relax"].front() * (std::round(tries) >= 1.0 ? 0.5 : 0.25);
