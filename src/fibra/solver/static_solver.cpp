@@ -392,6 +392,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
   // Floor for the reference force: the force that strains the stiffest fiber by 1e-5. Round-off
   // in the internal forces is about eps * E A per dof, so residuals relative to a smaller
   // reference (an unloaded step) could never converge.
+  const size_t first = history.size();  // this solve's residuals start here
   double force_floor = 0.0;
   for (const Fiber& f : m_model.fibers)
     force_floor = std::max(force_floor, m_model.materials[f.material].young * m_model.sections[f.section].area);
@@ -497,7 +498,13 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     // search (Armijo, on the total potential compared from the current state) is a safeguard
     // used only once the residual stops decreasing after a few iterations.
     const size_t k = history.size();
-    const bool stalled = k >= 4 && history[k - 1] > history[k - 2];
+    // Or, later, it makes no progress over three iterations: full steps cycling between
+    // stick and slip (the frozen friction energy is only C1), rising once per period.
+    // (Far above the tolerance only: near it the energy's change is round-off.)
+    const bool stalled =
+        (k >= 4 && history[k - 1] > history[k - 2]) ||
+        (k >= first + 7 && history[k - 1] > 1e3 * m_newton_tolerance &&
+         history[k - 1] > 0.9 * std::min({history[k - 2], history[k - 3], history[k - 4]}));
     m_problem->set_energy_base(m_q);
     const double s0 = dq.dot(r);
     double alpha = 1.0;
@@ -637,7 +644,7 @@ void StaticSolver::restore_state(const SolverState& s, const std::string& file) 
     try {
       m_bodies->restore(s.bodies);
     } catch (const std::invalid_argument& e) {
-      throw InputError(file, "(file)", fmt::format("corrupt: {}", e.what()));
+      throw InputError(file, "(file)", fmt::format("the bodies' state does not fit this case: {}", e.what()));
     }
   }
   if (m_contact && m_problem->set_contacts(s.contacts, m_contact->friction())) m_linear->analyze(m_problem->pattern());
