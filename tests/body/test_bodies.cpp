@@ -12,6 +12,9 @@
 // against central differences (h = cbrt(eps) scaled; relative error ~1e-9 expected, 1e-6
 // asked). The conditions are zero for any rigid motion of the whole assembly (the frame
 // invariance the formulation must have) and non-zero when one member moves alone.
+// Grips (tow2's ends along its axes 1 and 3, which are turned from the global ones; the mixed
+// binding's ends along 2) are part of every binding energy above; a gripped end moved along
+// a gripped axis breaks its condition by that motion, along the free axis not at all.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -138,6 +141,7 @@ ends = [{ fiber = "a", node = "last" }, { fiber = "b", node = "last" }, { fiber 
 [[binding]]
 body = "tow2"
 ends = [{ fiber = "d", node = "last" }, { fiber = "e", node = "last" }, { fiber = "f", node = "last" }]
+grip = [1, 3]
 [[binding]]
 body = "edge"
 bodies = ["tow1", "tow2"]
@@ -145,6 +149,7 @@ bodies = ["tow1", "tow2"]
 body = "mixed"
 ends = [{ fiber = "a", node = "first" }, { fiber = "d", node = "first" }]
 bodies = ["edge"]
+grip = [2]
 [[step]]
 name = "s"
 )";

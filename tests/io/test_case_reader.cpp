@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <tuple>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -989,6 +990,18 @@ const std::vector<BadCase> kBadBodyCases = {
      "a binding needs members: give `ends` and/or `bodies`"},
     {"BindingNoMembers", "ends = [{ fiber = \"f3\", node = 8 }]\n", "", "binding[1]",
      "a binding needs members: give `ends` and/or `bodies`"},
+    {"GripNotArray", "ends = [{ fiber = \"f3\", node = 8 }]\n", "ends = [{ fiber = \"f3\", node = 8 }]\ngrip = 2\n",
+     "binding[1].grip", "expected an array of the body's axes (1, 2, 3) along which each bound fiber end is held, got an integer"},
+    {"GripAxisOutOfRange", "ends = [{ fiber = \"f3\", node = 8 }]\n",
+     "ends = [{ fiber = \"f3\", node = 8 }]\ngrip = [2, 4]\n", "binding[1].grip[1]", "got axis 4"},
+    {"GripAxisZero", "ends = [{ fiber = \"f3\", node = 8 }]\n", "ends = [{ fiber = \"f3\", node = 8 }]\ngrip = [0]\n",
+     "binding[1].grip[0]", "must be >= 1, got 0"},
+    {"GripAxisTwice", "ends = [{ fiber = \"f3\", node = 8 }]\n",
+     "ends = [{ fiber = \"f3\", node = 8 }]\ngrip = [3, 3]\n", "binding[1].grip[1]", "axis 3 is listed twice"},
+    {"GripAllAxes", "ends = [{ fiber = \"f3\", node = 8 }]\n",
+     "ends = [{ fiber = \"f3\", node = 8 }]\ngrip = [1, 2, 3]\n", "binding[1].grip", "grip at most two axes"},
+    {"GripWithoutEnds", "bodies = [\"towA\", \"towB\"]", "bodies = [\"towA\", \"towB\"]\ngrip = [2]",
+     "binding[2].grip", "a grip holds bound fiber ends, and this binding has none"},
     {"DuplicateEnd", "{ fiber = \"f2\", at = 1 }", "{ fiber = \"f1\", node = \"last\" }", "binding[0].ends[1]",
      "duplicate end: node last of fiber \"f1\" is already binding[0].ends[0]"},
     {"DuplicateEndByIndex", "{ fiber = \"f3\", node = 8 }",
@@ -1171,6 +1184,40 @@ TEST(CaseReaderFabric, ReadsTheFabricTable) {
   EXPECT_EQ(c.steps[1].kind, StepSpec::Kind::Relax);
 }
 
+TEST(CaseReaderFabric, GripOfTheTowEnds) {
+  // Default: the paper's averaged binding, no grip on any tow end.
+  const Case plain = parse_case_toml(kFabric, "fabric.toml");
+  EXPECT_EQ(plain.fabric->grip, FabricSpec::Grip::Averaged);
+  for (const BindingSpec& b : plain.bindings) EXPECT_TRUE(b.grip.empty()) << b.body;
+  // width: each end held across its tow in the plane (warp: D2 = y; weft: D1 = x);
+  // clamped: and across the thickness (D3 = z). Edge bindings (bodies only) never grip.
+  for (const auto& [word, warp, weft] :
+       {std::tuple{"width", std::vector<int>{2}, std::vector<int>{1}},
+        std::tuple{"clamped", std::vector<int>{2, 3}, std::vector<int>{1, 3}}}) {
+    const Case c = parse_case_toml(
+        replace_once(kFabric, "pattern = \"plain\"", std::string("pattern = \"plain\"\ngrip = \"") + word + "\""),
+        "fabric.toml");
+    int ends = 0;
+    for (const BindingSpec& b : c.bindings) {
+      if (!b.ends.empty()) {
+        ++ends;
+        EXPECT_EQ(b.grip, b.body.rfind("warp", 0) == 0 ? warp : weft) << word << " " << b.body;
+      } else {
+        EXPECT_TRUE(b.grip.empty()) << b.body;
+      }
+    }
+    EXPECT_EQ(ends, 8) << word;  // 4 tows x 2 ends
+  }
+}
+
+TEST(CaseReaderBodies, GripAxesAreReadSorted) {
+  const Case c = parse_case_toml(
+      replace_once(kBodies, "ends = [{ fiber = \"f3\", node = 8 }]\n", "ends = [{ fiber = \"f3\", node = 8 }]\ngrip = [3, 1]\n"),
+      "bodies.toml");
+  EXPECT_TRUE(c.bindings[0].grip.empty());
+  EXPECT_EQ(c.bindings[1].grip, (std::vector<int>{1, 3}));
+}
+
 TEST(CaseReaderFabric, DefaultsOfMarginAndTension) {
   std::string text = replace_once(kFabric, "margin = 0.4e-3\n", "");
   text = replace_once(text, "tension = 0.02\n", "");
@@ -1343,6 +1390,11 @@ const std::vector<BadCase> kBadFabricCases = {
     // The weave.
     {"UnknownPattern", "pattern = \"plain\"", "pattern = \"plian\"", "fabric.pattern",
      "unknown pattern \"plian\" (did you mean \"plain\"?)"},
+    {"UnknownGrip", "pattern = \"plain\"", "pattern = \"plain\"\ngrip = \"tight\"", "fabric.grip",
+     "expected \"averaged\" (the ends' mean held), \"width\" (each end held across the tow in the fabric's plane) or "
+     "\"clamped\" (each end held across the tow), got \"tight\""},
+    {"GripNotString", "pattern = \"plain\"", "pattern = \"plain\"\ngrip = 2", "fabric.grip",
+     "expected a string, got an integer"},
     {"MisspeltTwill", "pattern = \"plain\"", "pattern = \"twil 2/1\"", "fabric.pattern",
      "(did you mean \"twill 2/1\"?)"},
     {"BadTwill", "pattern = \"plain\"", "pattern = \"twill 2\"", "fabric.pattern",

@@ -212,6 +212,7 @@ ends = [{ fiber = "f1", node = "last" }, { fiber = "f2", at = 1 }, { fiber = "f1
 [[binding]]
 body = "towB"
 ends = [{ fiber = "f3", node = 8 }]
+grip = [1, 3]
 
 [[binding]]
 body = "grip"
@@ -384,6 +385,7 @@ TEST(CaseWriter, RoundTripsTheExamples) {
 TEST(CaseWriter, RoundTripsBodiesAndAHierarchy) {
   const Case c = parse_case_toml(kHierarchy, "hierarchy.toml");
   ASSERT_EQ(c.bindings.size(), 3u);
+  ASSERT_EQ(c.bindings[1].grip, (std::vector<int>{1, 3}));
   expect_round_trip(c, "hierarchy.toml");
 }
 

@@ -76,6 +76,13 @@ BodySystem::BodySystem(const Case& c, const Model& model) : m_model(model) {
     }
     if (bd.members.empty())
       throw InputError(c.file, key, "a binding needs members: give `ends` and/or `bodies`");
+    for (int axis : spec.grip) {
+      if (axis < 1 || axis > 3 || spec.grip.size() > 2)
+        throw InputError(c.file, key + ".grip", "expected at most two of the body's axes 1, 2, 3");
+      bd.grip.push_back(axis - 1);
+    }
+    if (!bd.grip.empty() && spec.ends.empty())
+      throw InputError(c.file, key + ".grip", "a grip holds bound fiber ends, and this binding has none");
     parent_of[bd.body].push_back(static_cast<int>(i));
     m_bindings.push_back(std::move(bd));
   }
@@ -132,6 +139,8 @@ BodySystem::BodySystem(const Case& c, const Model& model) : m_model(model) {
       }
       bd.s = std::sqrt(sum2 / n);
       bd.k = c.solver.binding_stiffness > 0.0 ? c.solver.binding_stiffness : 100.0 * k_ref * count;
+      // A grip condition holds one node: the stiffness the averaged position gives its mean.
+      bd.kg = c.solver.binding_stiffness > 0.0 ? c.solver.binding_stiffness : 100.0 * k_ref;
       m_bodies[b].size = std::max(m_bodies[b].size, bd.s);
       node_count[b] += count;
     }
@@ -199,8 +208,31 @@ double BodySystem::violation(const VecX& q) const {
   for (const Binding& b : m_bindings) {
     const Vec6 g = spatial_conditions(b, q);
     v = std::max({v, g.head<3>().norm(), g.tail<3>().norm()});
+    for (const Member& m : b.members)
+      if (m.body < 0)
+        for (int i : b.grip) v = std::max(v, std::abs(grip_condition(b, m, i, q)));
   }
   return v;
+}
+
+std::vector<Vec3> BodySystem::grip_conditions(Index k, const VecX& q) const {
+  const Binding& b = m_bindings[k];
+  std::vector<Vec3> out;
+  for (const Member& m : b.members) {
+    if (m.body >= 0) continue;
+    Vec3 g = Vec3::Zero();
+    for (int i : b.grip) g[i] = grip_condition(b, m, i, q);
+    out.push_back(g);
+  }
+  return out;
+}
+
+Index BodySystem::num_grip_conditions() const {
+  Index n = 0;
+  for (const Binding& b : m_bindings)
+    for (const Member& m : b.members)
+      if (m.body < 0) n += static_cast<Index>(b.grip.size());
+  return n;
 }
 
 void BodySystem::update_multipliers(const VecX& q) {
@@ -209,6 +241,9 @@ void BodySystem::update_multipliers(const VecX& q) {
     const Vec6 g = spatial_conditions(b, q);
     b.lambda.head<3>() += b.k * (dref.transpose() * g.head<3>());
     b.lambda.tail<3>() += b.k * (dref.transpose() * g.tail<3>());
+    for (Member& m : b.members)
+      if (m.body < 0)
+        for (int i : b.grip) m.grip_lambda[i] += b.kg * grip_condition(b, m, i, q);
   }
 }
 
@@ -234,12 +269,22 @@ std::vector<double> BodySystem::multipliers() const {
   std::vector<double> out;
   out.reserve(6 * m_bindings.size());
   for (const Binding& b : m_bindings) out.insert(out.end(), b.lambda.data(), b.lambda.data() + 6);
+  for (const Binding& b : m_bindings)
+    if (!b.grip.empty())
+      for (const Member& m : b.members)
+        if (m.body < 0) out.insert(out.end(), m.grip_lambda.data(), m.grip_lambda.data() + 3);
   return out;
 }
 
 void BodySystem::set_multipliers(const std::vector<double>& values) {
   for (size_t k = 0; k < m_bindings.size(); ++k)
     for (int i = 0; i < 6; ++i) m_bindings[k].lambda[i] = values.at(6 * k + i);
+  size_t at = 6 * m_bindings.size();
+  for (Binding& b : m_bindings)
+    if (!b.grip.empty())
+      for (Member& m : b.members)
+        if (m.body < 0)
+          for (int i = 0; i < 3; ++i) m.grip_lambda[i] = values.at(at++);
 }
 
 std::vector<double> BodySystem::snapshot() const {
@@ -255,9 +300,14 @@ std::vector<double> BodySystem::snapshot() const {
 }
 
 void BodySystem::restore(const std::vector<double>& values) {
-  if (values.size() != 12 * m_bodies.size() + 6 * m_bindings.size())
-    throw std::invalid_argument(fmt::format("body state of {} values, {} expected", values.size(),
-                                            12 * m_bodies.size() + 6 * m_bindings.size()));
+  const size_t expected = 12 * m_bodies.size() + multipliers().size();
+  if (values.size() != expected) {
+    const size_t averaged = 12 * m_bodies.size() + 6 * m_bindings.size();
+    throw std::invalid_argument(
+        values.size() == averaged   ? "the state was saved without the grips this case's bindings have"
+        : expected == averaged      ? "the state was saved with grips this case's bindings do not have"
+                                    : fmt::format("body state of {} values, {} expected", values.size(), expected));
+  }
   const double* v = values.data();
   for (BodyData& b : m_bodies) {
     b.frame_ref = Eigen::Map<const Mat3>(v);
@@ -268,6 +318,73 @@ void BodySystem::restore(const std::vector<double>& values) {
 }
 
 double BodySystem::binding_energy(const Binding& b, const VecX& q, VecX* grad, Eigen::MatrixXd* hess) const {
+  const double energy = averaged_energy(b, q, grad, hess);
+  return b.grip.empty() ? energy : energy + grip_energy(b, q, grad, hess);
+}
+
+double BodySystem::grip_condition(const Binding& b, const Member& m, int i, const VecX& q) const {
+  const Body& body = m_model.bodies[b.body];
+  const Mat3 e = rotation_exp(-q.segment<3>(body.first_dof + 3).eval());
+  const Vec3 v = q.segment<3>(m.dof) - q.segment<3>(body.first_dof);
+  return m_bodies[b.body].frame_ref.col(i).dot(e * v) - (b.mean[i] + m.a[i]);
+}
+
+double BodySystem::grip_energy(const Binding& b, const VecX& q, VecX* grad, Eigen::MatrixXd* hess) const {
+  // g = d_i . e(theta) (p - R) - c_i with d_i the body's axis i at the increment start and
+  // e(theta) = exp(-[theta]x): dg/dp = e^T d_i = -dg/dR, dg/dtheta_j = d_i . de_j (p - R);
+  // second derivatives d2g/dp dtheta_j = de_j^T d_i = -d2g/dR dtheta_j and
+  // d2g/dtheta_j dtheta_l = d_i . d2e_jl (p - R). Energy lambda g + k/2 g^2 per condition.
+  const Body& body = m_model.bodies[b.body];
+  const Mat3& dref = m_bodies[b.body].frame_ref;
+  const Index pd = body.first_dof;
+  const Vec3 r = q.segment<3>(pd);
+  const bool derivatives = grad || hess;
+  Mat3 dR[3], d2R[9];
+  const Mat3 e = rotation_exp(-q.segment<3>(pd + 3).eval(), derivatives ? dR : nullptr, hess ? d2R : nullptr);
+  Mat3 de[3];
+  if (derivatives)
+    for (int j = 0; j < 3; ++j) de[j] = -dR[j];
+  const int po = b.parent_offset;
+  double energy = 0.0;
+  for (const Member& m : b.members) {
+    if (m.body >= 0) continue;
+    const Vec3 v = q.segment<3>(m.dof) - r;
+    const Vec3 ev = e * v;
+    for (int i : b.grip) {
+      const Vec3 d = dref.col(i);
+      const double g = d.dot(ev) - (b.mean[i] + m.a[i]);
+      const double lambda = m.grip_lambda[i];
+      energy += lambda * g + 0.5 * b.kg * g * g;
+      if (!derivatives) continue;
+      const double mu = lambda + b.kg * g;
+      // Local gradient of g over (p, R, theta).
+      Eigen::Matrix<double, 9, 1> jg;
+      jg.head<3>() = e.transpose() * d;
+      jg.segment<3>(3) = -jg.head<3>();
+      for (int j = 0; j < 3; ++j) jg[6 + j] = d.dot(de[j] * v);
+      const int at[3] = {m.offset, po, po + 3};
+      if (grad)
+        for (int blk = 0; blk < 3; ++blk) grad->segment<3>(at[blk]) += mu * jg.segment<3>(3 * blk);
+      if (!hess) continue;
+      auto& h = *hess;
+      for (int bi = 0; bi < 3; ++bi)
+        for (int bj = 0; bj < 3; ++bj)
+          h.block<3, 3>(at[bi], at[bj]).noalias() +=
+              b.kg * jg.segment<3>(3 * bi) * jg.segment<3>(3 * bj).transpose();
+      Mat3 cross;  // d2g/dp dtheta (rows p, columns theta)
+      for (int j = 0; j < 3; ++j) cross.col(j) = de[j].transpose() * d;
+      h.block<3, 3>(m.offset, po + 3) += mu * cross;
+      h.block<3, 3>(po + 3, m.offset) += mu * cross.transpose();
+      h.block<3, 3>(po, po + 3) -= mu * cross;
+      h.block<3, 3>(po + 3, po) -= mu * cross.transpose();
+      for (int j = 0; j < 3; ++j)
+        for (int l = 0; l < 3; ++l) h(po + 3 + j, po + 3 + l) += mu * d.dot(d2R[3 * j + l] * v);
+    }
+  }
+  return energy;
+}
+
+double BodySystem::averaged_energy(const Binding& b, const VecX& q, VecX* grad, Eigen::MatrixXd* hess) const {
   const Body& body = m_model.bodies[b.body];
   const Mat3& dref = m_bodies[b.body].frame_ref;
   const Index pd = body.first_dof;

@@ -18,6 +18,11 @@
 /// tied. The conditions are enforced by an augmented Lagrangian: energy
 /// lambda . g + k/2 |g|^2 per binding, exact gradient and Hessian, multipliers updated
 /// (lambda += k g) until |g| is below the tolerance.
+///
+/// A grip (BindingSpec::grip) adds, per bound fiber node and per gripped body axis i, the
+/// condition g_mi = D_i . (p_m - R) - c_mi = 0 (c_m: the node's initial position in the body
+/// frame): each end is held by itself along those axes, like a clamp holds the fibers of a
+/// tow, not only in average. Same augmented Lagrangian, one multiplier per condition.
 #include <string>
 #include <vector>
 
@@ -74,16 +79,24 @@ class BodySystem {
   double anchor_drift(const VecX& q) const;
   /// Stiffness of the proximal spring [N/m].
   double proximal_stiffness() const { return m_mu; }
-  /// Multipliers of all bindings (6 per binding, body frame), to save and restore.
+  /// Multipliers of all bindings (6 per binding, body frame), then those of the grips (3 per
+  /// gripped node, zero on axes not gripped), to save and restore.
   std::vector<double> multipliers() const;
   void set_multipliers(const std::vector<double>& values);  ///< restores multipliers()
   /// The state that outlives an increment: per body the committed frame (9 values, column
-  /// major) and accumulated rotation (3), then the multipliers (6 per binding).
+  /// major) and accumulated rotation (3), then multipliers().
   std::vector<double> snapshot() const;
   /// Restores snapshot(); throws std::invalid_argument if its size does not match.
   void restore(const std::vector<double>& values);
   /// Penalty of binding k [N/m].
   double stiffness(Index k) const { return m_bindings[k].k; }
+  /// Penalty of each gripped condition of binding k [N/m] (0 when it grips nothing).
+  double grip_stiffness(Index k) const { return m_bindings[k].grip.empty() ? 0.0 : m_bindings[k].kg; }
+  /// Grip conditions of binding k at q: per bound fiber node (in the order of its `ends`), its
+  /// offset from its initial position along the body's axes (zero on axes not gripped) [m].
+  std::vector<Vec3> grip_conditions(Index k, const VecX& q) const;
+  /// Number of gripped conditions (nodes x gripped axes) of all bindings.
+  Index num_grip_conditions() const;
 
   /// Current frame of body b at q.
   Mat3 frame(Index b, const VecX& q) const;
@@ -108,6 +121,7 @@ class BodySystem {
     double l2 = 0;       ///< bound body: squared rotational length (its own size)
     double r2 = 0;       ///< fiber node: squared section radius (scales its section vectors)
     Eigen::Matrix<double, 9, 1> anchor = Eigen::Matrix<double, 9, 1>::Zero();  ///< proximal anchor (nodes)
+    Vec3 grip_lambda = Vec3::Zero();  ///< grip multipliers along the body axes (nodes) [N]
   };
   struct Binding {
     int body = 0;
@@ -118,16 +132,24 @@ class BodySystem {
     double s = 0;              ///< rms radius of the members (with bound bodies' sizes)
     double k = 0;              ///< penalty [N/m]
     Vec6 lambda = Vec6::Zero();  ///< multipliers, body frame [N]
+    std::vector<int> grip;       ///< gripped body axes (0-based)
+    double kg = 0;               ///< penalty of each grip condition [N/m]
   };
   struct BodyData {
     Mat3 frame_ref = Mat3::Identity();  ///< D_ref: frame at the start of the increment
     Vec3 rotation = Vec3::Zero();       ///< accumulated rotation components
     double size = 0;
   };
-  /// Energy of binding k (local gradient and Hessian when given, sized local_size).
+  /// Energy of binding k with its grips (local gradient and Hessian when given, sized local_size).
   double binding_energy(const Binding& b, const VecX& q, VecX* g, Eigen::MatrixXd* h) const;
+  /// The averaged conditions' part of binding_energy (sets g and h; the grips add to them).
+  double averaged_energy(const Binding& b, const VecX& q, VecX* g, Eigen::MatrixXd* h) const;
   /// Conditions of binding b in the spatial frame of the start of the increment (D_ref g).
   Vec6 spatial_conditions(const Binding& b, const VecX& q) const;
+  /// Grip condition of node member m of binding b along body axis i at q.
+  double grip_condition(const Binding& b, const Member& m, int i, const VecX& q) const;
+  /// Adds the grips' energy of binding b (and their local gradient and Hessian when given).
+  double grip_energy(const Binding& b, const VecX& q, VecX* g, Eigen::MatrixXd* h) const;
 
   const Model& m_model;
   std::vector<BodyData> m_bodies;

@@ -1053,7 +1053,7 @@ BindingSpec Reader::read_binding(const Value& t, const std::string& path, std::s
     if (j < generated) return fmt::format("a binding the [fabric] generates (to body \"{}\")", earlier[j].body);
     return fmt::format("binding[{}] (to body \"{}\")", j - generated, earlier[j].body);
   };
-  check_keys(t, path, {"body", "ends", "bodies"});
+  check_keys(t, path, {"body", "ends", "bodies", "grip"});
   BindingSpec b;
   b.line = static_cast<int>(k);
   {
@@ -1151,6 +1151,31 @@ BindingSpec Reader::read_binding(const Value& t, const std::string& path, std::s
 
   if (b.ends.empty() && b.bodies.empty()) {
     fail(path, "a binding needs members: give `ends` and/or `bodies`", &t);
+  }
+
+  if (const Value* v = find(t, "grip")) {
+    const std::string key = join(path, "grip");
+    const std::string expected = "expected an array of the body's axes (1, 2, 3) along which each bound fiber end is held";
+    if (v->type != Value::Type::Array) fail(key, fmt::format("{}, got {}", expected, describe(*v)), v);
+    for (std::size_t i = 0; i < v->items.size(); ++i) {
+      const std::string axis_key = item(key, i);
+      const int axis = to_int(v->items[i], axis_key, 1);
+      if (axis > 3) fail(axis_key, fmt::format("{}, got axis {}", expected, axis), &v->items[i]);
+      if (std::find(b.grip.begin(), b.grip.end(), axis) != b.grip.end()) {
+        fail(axis_key, fmt::format("axis {} is listed twice", axis), &v->items[i]);
+      }
+      b.grip.push_back(axis);
+    }
+    if (b.grip.size() == 3) {
+      fail(key,
+           "all three axes: each end would be held rigidly in the body (no freedom left to the fibers along their "
+           "length); grip at most two axes, the ones across the fibers",
+           v);
+    }
+    if (!b.grip.empty() && b.ends.empty()) {
+      fail(key, "a grip holds bound fiber ends, and this binding has none (only `bodies`)", v);
+    }
+    std::sort(b.grip.begin(), b.grip.end());
   }
   return b;
 }
@@ -1445,7 +1470,7 @@ FabricDirectionSpec Reader::read_fabric_direction(const Value& fabric, const std
 FabricSpec Reader::read_fabric(const Value& t, const std::string& path,
                                const std::vector<MaterialSpec>& materials) const {
   expect_table(t, path);
-  check_keys(t, path, {"pattern", "matrix", "warp", "weft", "margin", "tension", "tow", "fiber"});
+  check_keys(t, path, {"pattern", "matrix", "warp", "weft", "margin", "tension", "grip", "tow", "fiber"});
   FabricSpec f;
   const Value* pattern = find(t, "pattern");
   const Value* matrix = find(t, "matrix");
@@ -1497,6 +1522,23 @@ FabricSpec Reader::read_fabric(const Value& t, const std::string& path,
     f.tension = to_number(*v, key);
     if (!(f.tension >= 0)) {
       fail(key, fmt::format("expected a force per fiber >= 0 [N] (0 = automatic), got {}", f.tension), v);
+    }
+  }
+  if (const Value* v = find(t, "grip")) {
+    const std::string key = join(path, "grip");
+    const std::string g = to_string(*v, key);
+    if (g == "averaged") {
+      f.grip = FabricSpec::Grip::Averaged;
+    } else if (g == "width") {
+      f.grip = FabricSpec::Grip::Width;
+    } else if (g == "clamped") {
+      f.grip = FabricSpec::Grip::Clamped;
+    } else {
+      fail(key,
+           fmt::format("expected \"averaged\" (the ends' mean held), \"width\" (each end held across the tow in the "
+                       "fabric's plane) or \"clamped\" (each end held across the tow), got \"{}\"",
+                       g),
+           v);
     }
   }
   return f;

@@ -211,6 +211,11 @@ void write_binding(std::string& out, const BindingSpec& b) {
     for (const std::string& name : b.bodies) bodies.push_back(quoted(name));
     out += fmt::format("bodies = {}\n", array(bodies, 8));
   }
+  if (!b.grip.empty()) {
+    std::string axes;
+    for (int a : b.grip) axes += fmt::format("{}{}", axes.empty() ? "" : ", ", a);
+    out += fmt::format("grip = [{}]\n", axes);
+  }
 }
 
 void write_tow(std::string& out, const TowSpec& t) {

@@ -105,6 +105,10 @@ struct BindingSpec {
   std::string body;                 ///< the body the members follow
   std::vector<NodeRef> ends;        ///< bound fiber nodes
   std::vector<std::string> bodies;  ///< bound bodies (hierarchy: a tow end to a fabric edge)
+  /// Axes of the body (1, 2, 3: D1, D2, D3) along which each bound fiber node is also held by
+  /// itself at its initial position in the body frame (a grip), not only in average; empty:
+  /// the averaged conditions alone (the paper's binding).
+  std::vector<int> grip;
   int line = 0;                     ///< index of the [[binding]] entry (for messages)
 };
 
@@ -152,6 +156,11 @@ struct FabricSpec {
   FabricDirectionSpec warp, weft;
   double margin = 0;   ///< free length of every tow beyond the outer crossings [m]
   double tension = 0;  ///< force per fiber pulling the free edges during weaving [N]; 0 = default
+  /// How a tow-end body holds its fiber ends: averaged (the paper: the ends' mean position and
+  /// rotation follow the body), width (each end also held across the tow in the fabric's
+  /// plane), clamped (each end held across the tow in both directions).
+  enum class Grip { Averaged, Width, Clamped };
+  Grip grip = Grip::Averaged;
 };
 
 /// A tow of a fiber assembly ([[tow]]): a named group of fibers, warp or weft; the weave

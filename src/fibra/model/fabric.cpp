@@ -261,6 +261,13 @@ void expand_fabric(Case& c) {
       BindingSpec start_binding, end_binding;
       start_binding.body = tow.name + ".start";
       end_binding.body = tow.name + ".end";
+      // The tow-end bodies' axes are the global ones: across a warp tow are D2 (width, in the
+      // plane) and D3 (thickness); across a weft tow D1 and D3.
+      if (f.grip != FabricSpec::Grip::Averaged) {
+        start_binding.grip = {dir == 0 ? 2 : 1};
+        if (f.grip == FabricSpec::Grip::Clamped) start_binding.grip.push_back(3);
+        end_binding.grip = start_binding.grip;
+      }
       for (size_t k = 0; k < d.sites.size(); ++k) {
         const Eigen::Vector2d& p = d.sites[k];
         FiberSpec fib;
