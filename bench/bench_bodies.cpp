@@ -11,6 +11,8 @@
 //                                 pattern of the binding stencils only; items = bindings,
 //                                 also member_evals_per_second (bound members per second);
 //                                 T OpenMP threads (used only inside Eigen's GEMM)
+//   BM_BindingEnergyGripped       the same (1 thread) with every tow end gripped across its
+//                                 tow (grip = [2, 3] / [1, 3]: 1 920 grip conditions more)
 //   BM_BindingGradient            the same, energy + gradient only (1 thread, as the rest)
 //   BM_BindingScatter             the scatter_local calls of BM_BindingEnergy alone (a dense
 //                                 local matrix per binding), to split kernel and scatter
@@ -89,8 +91,9 @@ std::vector<std::pair<double, double>> tow_section() {
   return out;
 }
 
-/// The fabric as a case file (see the header comment).
-std::string fabric_toml() {
+/// The fabric as a case file (see the header comment); `grip`: every tow-end binding also
+/// holds each fiber end across its tow (grip = [2, 3] for x tows, [1, 3] for y tows).
+std::string fabric_toml(bool grip) {
   std::ostringstream s;
   s.precision(17);
   s << "[[material]]\nname = \"glass\"\nyoung = 72e9\npoisson = 0.22\n";
@@ -132,6 +135,7 @@ std::string fabric_toml() {
       for (int f = 0; f < kFibersPerTow; ++f)
         s << (f ? ", " : "") << "{ fiber = \"" << t.name << "f" << f << "\", node = \"" << end_names[e] << "\" }";
       s << "]\n";
+      if (grip) s << (t.axis == 0 ? "grip = [2, 3]\n" : "grip = [1, 3]\n");
     }
   // Edge bodies: the 5 tow ends of one edge (x = 0, x = L for the x tows; y = 0, y = L for the y tows).
   const double mid = 0.5 * kTowsPerDirection * kTowSpacing;
@@ -162,7 +166,8 @@ struct Fabric {
   Index largest_local = 0;
   std::vector<Index> local_sizes;  ///< local vector size of each binding's stencil
 
-  Fabric() : spec(parse_case_toml(fabric_toml(), "<bench_bodies>")), model(build_model(spec)), bodies(spec, model) {
+  explicit Fabric(bool grip)
+      : spec(parse_case_toml(fabric_toml(grip), "<bench_bodies>")), model(build_model(spec)), bodies(spec, model) {
     std::mt19937 rng(11);
     std::normal_distribution<double> normal(0.0, 1.0);
     q = model.reference;
@@ -197,10 +202,10 @@ struct Fabric {
   }
 };
 
-Fabric& fabric() {
-  static std::unique_ptr<Fabric> f;
-  if (!f) f = std::make_unique<Fabric>();
-  return *f;
+Fabric& fabric(bool grip = false) {
+  static std::unique_ptr<Fabric> f[2];
+  if (!f[grip]) f[grip] = std::make_unique<Fabric>(grip);
+  return *f[grip];
 }
 
 /// Target over the binding stencils alone (as tests/body/test_bodies.cpp's Fixture).
@@ -246,6 +251,19 @@ void BM_BindingEnergy(benchmark::State& state) {
   state.counters["nnz_bindings"] = static_cast<double>(t.pattern.nonzeros());
 }
 BENCHMARK(BM_BindingEnergy)->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The same with every fiber end gripped across its tow (2 x 960 grip conditions more).
+void BM_BindingEnergyGripped(benchmark::State& state) {
+  Fabric& f = fabric(true);
+  omp_set_num_threads(1);
+  BindingTarget t(f);
+  const AssemblyTarget target = t.target(true);
+  f.bodies.evaluate(f.q, target, true, true);
+  for (auto _ : state) benchmark::DoNotOptimize(f.bodies.evaluate(f.q, target, true, true));
+  binding_counters(state, f);
+  state.counters["grip_conditions"] = static_cast<double>(f.bodies.num_grip_conditions());
+}
+BENCHMARK(BM_BindingEnergyGripped)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_BindingGradient(benchmark::State& state) {
   Fabric& f = fabric();
