@@ -240,9 +240,9 @@ void binding_counters(benchmark::State& state, const Fabric& f) {
 // threads: the OpenMP thread count, which BodySystem::evaluate (sequential) only reaches
 // through Eigen: its GEMM k J^T J (438 x 6 x 438) is above Eigen's threshold for splitting a
 // product over the OpenMP threads.
-void BM_BindingEnergy(benchmark::State& state) {
-  Fabric& f = fabric();
-  omp_set_num_threads(static_cast<int>(state.range(0)));
+// Energy + gradient + Hessian of every binding of `f` with `threads` OpenMP threads.
+void binding_energy_loop(benchmark::State& state, Fabric& f, int threads) {
+  omp_set_num_threads(threads);
   BindingTarget t(f);
   const AssemblyTarget target = t.target(true);
   f.bodies.evaluate(f.q, target, true, true);  // warm-up
@@ -250,17 +250,16 @@ void BM_BindingEnergy(benchmark::State& state) {
   binding_counters(state, f);
   state.counters["nnz_bindings"] = static_cast<double>(t.pattern.nonzeros());
 }
+
+void BM_BindingEnergy(benchmark::State& state) {
+  binding_energy_loop(state, fabric(), static_cast<int>(state.range(0)));
+}
 BENCHMARK(BM_BindingEnergy)->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The same with every fiber end gripped across its tow (2 x 960 grip conditions more).
 void BM_BindingEnergyGripped(benchmark::State& state) {
   Fabric& f = fabric(true);
-  omp_set_num_threads(1);
-  BindingTarget t(f);
-  const AssemblyTarget target = t.target(true);
-  f.bodies.evaluate(f.q, target, true, true);
-  for (auto _ : state) benchmark::DoNotOptimize(f.bodies.evaluate(f.q, target, true, true));
-  binding_counters(state, f);
+  binding_energy_loop(state, f, 1);
   state.counters["grip_conditions"] = static_cast<double>(f.bodies.num_grip_conditions());
 }
 BENCHMARK(BM_BindingEnergyGripped)->Unit(benchmark::kMillisecond)->UseRealTime();

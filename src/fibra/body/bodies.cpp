@@ -208,23 +208,16 @@ double BodySystem::violation(const VecX& q) const {
   for (const Binding& b : m_bindings) {
     const Vec6 g = spatial_conditions(b, q);
     v = std::max({v, g.head<3>().norm(), g.tail<3>().norm()});
-    for (const Member& m : b.members)
-      if (m.body < 0)
-        for (int i : b.grip) v = std::max(v, std::abs(grip_condition(b, m, i, q)));
+    if (b.grip.empty()) continue;
+    const Index pd = m_model.bodies[b.body].first_dof;
+    const Mat3 e = rotation_exp(-q.segment<3>(pd + 3).eval());
+    for (const Member& m : b.members) {
+      if (m.body >= 0) continue;
+      const Vec3 off = grip_offset(b, m, q, e, q.segment<3>(pd));
+      for (int i : b.grip) v = std::max(v, std::abs(off[i]));
+    }
   }
   return v;
-}
-
-std::vector<Vec3> BodySystem::grip_conditions(Index k, const VecX& q) const {
-  const Binding& b = m_bindings[k];
-  std::vector<Vec3> out;
-  for (const Member& m : b.members) {
-    if (m.body >= 0) continue;
-    Vec3 g = Vec3::Zero();
-    for (int i : b.grip) g[i] = grip_condition(b, m, i, q);
-    out.push_back(g);
-  }
-  return out;
 }
 
 Index BodySystem::num_grip_conditions() const {
@@ -241,9 +234,14 @@ void BodySystem::update_multipliers(const VecX& q) {
     const Vec6 g = spatial_conditions(b, q);
     b.lambda.head<3>() += b.k * (dref.transpose() * g.head<3>());
     b.lambda.tail<3>() += b.k * (dref.transpose() * g.tail<3>());
-    for (Member& m : b.members)
-      if (m.body < 0)
-        for (int i : b.grip) m.grip_lambda[i] += b.kg * grip_condition(b, m, i, q);
+    if (b.grip.empty()) continue;
+    const Index pd = m_model.bodies[b.body].first_dof;
+    const Mat3 e = rotation_exp(-q.segment<3>(pd + 3).eval());
+    for (Member& m : b.members) {
+      if (m.body >= 0) continue;
+      const Vec3 off = grip_offset(b, m, q, e, q.segment<3>(pd));
+      for (int i : b.grip) m.grip_lambda[i] += b.kg * off[i];
+    }
   }
 }
 
@@ -322,11 +320,8 @@ double BodySystem::binding_energy(const Binding& b, const VecX& q, VecX* grad, E
   return b.grip.empty() ? energy : energy + grip_energy(b, q, grad, hess);
 }
 
-double BodySystem::grip_condition(const Binding& b, const Member& m, int i, const VecX& q) const {
-  const Body& body = m_model.bodies[b.body];
-  const Mat3 e = rotation_exp(-q.segment<3>(body.first_dof + 3).eval());
-  const Vec3 v = q.segment<3>(m.dof) - q.segment<3>(body.first_dof);
-  return m_bodies[b.body].frame_ref.col(i).dot(e * v) - (b.mean[i] + m.a[i]);
+Vec3 BodySystem::grip_offset(const Binding& b, const Member& m, const VecX& q, const Mat3& e, const Vec3& r) const {
+  return m_bodies[b.body].frame_ref.transpose() * (e * (q.segment<3>(m.dof) - r)) - (b.mean + m.a);
 }
 
 double BodySystem::grip_energy(const Binding& b, const VecX& q, VecX* grad, Eigen::MatrixXd* hess) const {
@@ -349,10 +344,10 @@ double BodySystem::grip_energy(const Binding& b, const VecX& q, VecX* grad, Eige
   for (const Member& m : b.members) {
     if (m.body >= 0) continue;
     const Vec3 v = q.segment<3>(m.dof) - r;
-    const Vec3 ev = e * v;
+    const Vec3 off = grip_offset(b, m, q, e, r);
     for (int i : b.grip) {
       const Vec3 d = dref.col(i);
-      const double g = d.dot(ev) - (b.mean[i] + m.a[i]);
+      const double g = off[i];
       const double lambda = m.grip_lambda[i];
       energy += lambda * g + 0.5 * b.kg * g * g;
       if (!derivatives) continue;

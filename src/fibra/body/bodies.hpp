@@ -90,11 +90,6 @@ class BodySystem {
   void restore(const std::vector<double>& values);
   /// Penalty of binding k [N/m].
   double stiffness(Index k) const { return m_bindings[k].k; }
-  /// Penalty of each gripped condition of binding k [N/m] (0 when it grips nothing).
-  double grip_stiffness(Index k) const { return m_bindings[k].grip.empty() ? 0.0 : m_bindings[k].kg; }
-  /// Grip conditions of binding k at q: per bound fiber node (in the order of its `ends`), its
-  /// offset from its initial position along the body's axes (zero on axes not gripped) [m].
-  std::vector<Vec3> grip_conditions(Index k, const VecX& q) const;
   /// Number of gripped conditions (nodes x gripped axes) of all bindings.
   Index num_grip_conditions() const;
 
@@ -146,8 +141,10 @@ class BodySystem {
   double averaged_energy(const Binding& b, const VecX& q, VecX* g, Eigen::MatrixXd* h) const;
   /// Conditions of binding b in the spatial frame of the start of the increment (D_ref g).
   Vec6 spatial_conditions(const Binding& b, const VecX& q) const;
-  /// Grip condition of node member m of binding b along body axis i at q.
-  double grip_condition(const Binding& b, const Member& m, int i, const VecX& q) const;
+  /// Offset of node member m of binding b from its initial place in the body frame,
+  /// D^T (x0 - R) - (mean + a), given e = exp(-[theta]x) and the centre R of the body at q: its
+  /// components along the gripped axes are the grip conditions [m].
+  Vec3 grip_offset(const Binding& b, const Member& m, const VecX& q, const Mat3& e, const Vec3& r) const;
   /// Adds the grips' energy of binding b (and their local gradient and Hessian when given).
   double grip_energy(const Binding& b, const VecX& q, VecX* g, Eigen::MatrixXd* h) const;
 
