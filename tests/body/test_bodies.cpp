@@ -142,6 +142,7 @@ ends = [{ fiber = "a", node = "last" }, { fiber = "b", node = "last" }, { fiber 
 body = "tow2"
 ends = [{ fiber = "d", node = "last" }, { fiber = "e", node = "last" }, { fiber = "f", node = "last" }]
 grip = [1, 3]
+spin = true
 [[binding]]
 body = "edge"
 bodies = ["tow1", "tow2"]
@@ -150,6 +151,7 @@ body = "mixed"
 ends = [{ fiber = "a", node = "first" }, { fiber = "d", node = "first" }]
 bodies = ["edge"]
 grip = [2]
+spin = true
 [[step]]
 name = "s"
 )";
@@ -189,8 +191,11 @@ TEST(Bindings, ZeroAtTheReferenceAndUnderAnyRigidMotion) {
   const Mat3 rot = Eigen::AngleAxisd(2.2, Vec3(0.2, 1.0, -0.4).normalized()).toRotationMatrix();
   const Vec3 o(0.4, 0.1, -0.2), t(0.3, -0.7, 0.5);
   VecX q = ref;
-  for (Index n = 0; n < fx.model.num_nodes(); ++n)
+  for (Index n = 0; n < fx.model.num_nodes(); ++n) {
     q.segment<3>(9 * n) = rot * (ref.segment<3>(9 * n) - o) + o + t;
+    q.segment<3>(9 * n + 3) = rot * ref.segment<3>(9 * n + 3);
+    q.segment<3>(9 * n + 6) = rot * ref.segment<3>(9 * n + 6);
+  }
   for (const Body& b : fx.model.bodies) {
     q.segment<3>(b.first_dof) = rot * (ref.segment<3>(b.first_dof) - o) + o + t;
     q.segment<3>(b.first_dof + 3) = rotation_log(rot);
@@ -228,7 +233,11 @@ TEST(Bindings, ManyTurnsInIncrementsStayExactAndSatisfied) {
   VecX q = ref;
   for (int inc = 1; inc <= 10; ++inc) {
     const Mat3 total = Eigen::AngleAxisd(0.9 * inc, axis).toRotationMatrix();
-    for (Index n = 0; n < fx.model.num_nodes(); ++n) q.segment<3>(9 * n) = total * (ref.segment<3>(9 * n) - o) + o;
+    for (Index n = 0; n < fx.model.num_nodes(); ++n) {
+      q.segment<3>(9 * n) = total * (ref.segment<3>(9 * n) - o) + o;
+      q.segment<3>(9 * n + 3) = total * ref.segment<3>(9 * n + 3);
+      q.segment<3>(9 * n + 6) = total * ref.segment<3>(9 * n + 6);
+    }
     for (const Body& b : fx.model.bodies) {
       q.segment<3>(b.first_dof) = total * (ref.segment<3>(b.first_dof) - o) + o;
       q.segment<3>(b.first_dof + 3) = 0.9 * axis;
@@ -239,6 +248,49 @@ TEST(Bindings, ManyTurnsInIncrementsStayExactAndSatisfied) {
     fx.bodies.commit(q);
     EXPECT_LT((fx.bodies.committed_rotation(0) - 0.9 * inc * axis).norm(), 1e-13);
   }
+}
+
+TEST(Bindings, SpinHoldMeasuresTheTurnAboutTheFiberAxisOnly) {
+  // Fiber d's last node is bound to tow2 with a spin hold (tow2's axes are turned): turning
+  // its section vectors about the fiber's axis by psi breaks the hold by r sin(psi); tilting
+  // them about either section direction, or stretching them, does not.
+  Fixture fx;
+  const VecX& ref = fx.model.reference;
+  const Index node = fx.model.fibers[3].first_node + fx.model.fibers[3].num_nodes - 1;
+  const Vec3 g1 = ref.segment<3>(9 * node + 3), g2 = ref.segment<3>(9 * node + 6);
+  const Vec3 axis = g1.cross(g2).normalized();
+  const double r = 0.01;
+  for (double psi : {0.01, 0.3, -0.7}) {
+    VecX q = ref;
+    const Mat3 turn = Eigen::AngleAxisd(psi, axis).toRotationMatrix();
+    q.segment<3>(9 * node + 3) = turn * g1;
+    q.segment<3>(9 * node + 6) = turn * g2;
+    EXPECT_NEAR(fx.bodies.violation(q), r * std::abs(std::sin(psi)), 1e-15) << psi;
+    for (const Vec3& about : {g1.normalized(), g2.normalized()}) {
+      const Mat3 tilt = Eigen::AngleAxisd(psi, about).toRotationMatrix();
+      q = ref;
+      q.segment<3>(9 * node + 3) = 1.1 * (tilt * g1);
+      q.segment<3>(9 * node + 6) = 0.9 * (tilt * g2);
+      EXPECT_LT(fx.bodies.violation(q), 1e-15) << psi;
+    }
+  }
+  // Without multipliers the hold's energy is k/2 s^2 with s = r sin(psi): the moment of the
+  // section vectors' forces about the axis is dE/dpsi = k r^2 sin(psi) cos(psi), k the grip
+  // penalty (the binding's penalty over its 3 nodes: both are 100 k_ref per node).
+  std::vector<double> lambda = fx.bodies.multipliers();
+  std::fill(lambda.begin(), lambda.end(), 0.0);
+  fx.bodies.set_multipliers(lambda);
+  const double psi = 0.2;
+  VecX q = ref;
+  const Mat3 turn = Eigen::AngleAxisd(psi, axis).toRotationMatrix();
+  q.segment<3>(9 * node + 3) = turn * g1;
+  q.segment<3>(9 * node + 6) = turn * g2;
+  VecX g;
+  fx.energy(q, &g, nullptr);
+  const double moment = axis.dot(q.segment<3>(9 * node + 3).cross(g.segment<3>(9 * node + 3)) +
+                                 q.segment<3>(9 * node + 6).cross(g.segment<3>(9 * node + 6)));
+  const double k = fx.bodies.stiffness(1) / 3.0;
+  EXPECT_NEAR(moment, k * r * r * std::sin(psi) * std::cos(psi), 1e-6 * std::abs(moment));
 }
 
 TEST(Bindings, GradientAndHessianMatchFiniteDifferences) {

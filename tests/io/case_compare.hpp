@@ -121,6 +121,7 @@ inline void expect_same_case(const Case& a, const Case& b, bool compare_fabric =
     EXPECT_EQ(a.bindings[i].line, b.bindings[i].line) << w;
     EXPECT_EQ(a.bindings[i].bodies, b.bindings[i].bodies) << w;
     EXPECT_EQ(a.bindings[i].grip, b.bindings[i].grip) << w;
+    EXPECT_EQ(a.bindings[i].spin, b.bindings[i].spin) << w;
     ASSERT_EQ(a.bindings[i].ends.size(), b.bindings[i].ends.size()) << w;
     for (std::size_t k = 0; k < a.bindings[i].ends.size(); ++k) {
       expect_same_node(a.bindings[i].ends[k], b.bindings[i].ends[k], w + ".ends[" + std::to_string(k) + "]");

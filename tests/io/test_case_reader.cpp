@@ -1002,6 +1002,10 @@ const std::vector<BadCase> kBadBodyCases = {
      "ends = [{ fiber = \"f3\", node = 8 }]\ngrip = [1, 2, 3]\n", "binding[1].grip", "grip at most two axes"},
     {"GripWithoutEnds", "bodies = [\"towA\", \"towB\"]", "bodies = [\"towA\", \"towB\"]\ngrip = [2]",
      "binding[2].grip", "a grip holds bound fiber ends, and this binding has none"},
+    {"SpinNotBoolean", "ends = [{ fiber = \"f3\", node = 8 }]\n", "ends = [{ fiber = \"f3\", node = 8 }]\nspin = 1\n",
+     "binding[1].spin", "expected a boolean"},
+    {"SpinWithoutEnds", "bodies = [\"towA\", \"towB\"]", "bodies = [\"towA\", \"towB\"]\nspin = true",
+     "binding[2].spin", "holds bound fiber ends against turning about their axis, and this binding has none"},
     {"DuplicateEnd", "{ fiber = \"f2\", at = 1 }", "{ fiber = \"f1\", node = \"last\" }", "binding[0].ends[1]",
      "duplicate end: node last of fiber \"f1\" is already binding[0].ends[0]"},
     {"DuplicateEndByIndex", "{ fiber = \"f3\", node = 8 }",
@@ -1188,7 +1192,7 @@ TEST(CaseReaderFabric, GripOfTheTowEnds) {
   // Default: the paper's averaged binding, no grip on any tow end.
   const Case plain = parse_case_toml(kFabric, "fabric.toml");
   EXPECT_EQ(plain.fabric->grip, FabricSpec::Grip::Averaged);
-  for (const BindingSpec& b : plain.bindings) EXPECT_TRUE(b.grip.empty()) << b.body;
+  for (const BindingSpec& b : plain.bindings) EXPECT_TRUE(b.grip.empty() && !b.spin) << b.body;
   // width: each end held across its tow in the plane (warp: D2 = y; weft: D1 = x);
   // clamped: and across the thickness (D3 = z). Edge bindings (bodies only) never grip.
   for (const auto& [word, warp, weft] :
@@ -1202,8 +1206,9 @@ TEST(CaseReaderFabric, GripOfTheTowEnds) {
       if (!b.ends.empty()) {
         ++ends;
         EXPECT_EQ(b.grip, b.body.rfind("warp", 0) == 0 ? warp : weft) << word << " " << b.body;
+        EXPECT_TRUE(b.spin) << word << " " << b.body;  // a grip also holds each end's spin
       } else {
-        EXPECT_TRUE(b.grip.empty()) << b.body;
+        EXPECT_TRUE(b.grip.empty() && !b.spin) << b.body;
       }
     }
     EXPECT_EQ(ends, 8) << word;  // 4 tows x 2 ends

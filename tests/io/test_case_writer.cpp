@@ -213,6 +213,7 @@ ends = [{ fiber = "f1", node = "last" }, { fiber = "f2", at = 1 }, { fiber = "f1
 body = "towB"
 ends = [{ fiber = "f3", node = 8 }]
 grip = [1, 3]
+spin = true
 
 [[binding]]
 body = "grip"
@@ -386,6 +387,8 @@ TEST(CaseWriter, RoundTripsBodiesAndAHierarchy) {
   const Case c = parse_case_toml(kHierarchy, "hierarchy.toml");
   ASSERT_EQ(c.bindings.size(), 3u);
   ASSERT_EQ(c.bindings[1].grip, (std::vector<int>{1, 3}));
+  ASSERT_TRUE(c.bindings[1].spin);
+  ASSERT_FALSE(c.bindings[0].spin);
   expect_round_trip(c, "hierarchy.toml");
 }
 

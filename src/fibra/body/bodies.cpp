@@ -83,6 +83,22 @@ BodySystem::BodySystem(const Case& c, const Model& model) : m_model(model) {
     }
     if (!bd.grip.empty() && spec.ends.empty())
       throw InputError(c.file, key + ".grip", "a grip holds bound fiber ends, and this binding has none");
+    bd.spin = spec.spin;
+    if (bd.spin && spec.ends.empty())
+      throw InputError(c.file, key + ".spin", "a spin hold holds bound fiber ends, and this binding has none");
+    if (bd.spin) {
+      const Mat3& axes = model.bodies[bd.body].axes;
+      for (Member& m : bd.members) {
+        if (m.body >= 0) continue;
+        const Vec3 g1 = axes.transpose() * model.reference.segment<3>(m.dof + 3);
+        const Vec3 g2 = axes.transpose() * model.reference.segment<3>(m.dof + 6);
+        if (!(g1.norm() > 0.0) || !(g2.norm() > 0.0) || g1.cross(g2).norm() < 1e-6 * g1.norm() * g2.norm())
+          throw InputError(c.file, key + ".spin", "a bound node's section vectors are degenerate: its spin is undefined");
+        m.b1 = g1.normalized();
+        m.b2 = g2.normalized();
+        m.s0 = 0.5 * std::sqrt(m.r2) * (m.b2.dot(g1) - m.b1.dot(g2));
+      }
+    }
     parent_of[bd.body].push_back(static_cast<int>(i));
     m_bindings.push_back(std::move(bd));
   }
@@ -208,13 +224,16 @@ double BodySystem::violation(const VecX& q) const {
   for (const Binding& b : m_bindings) {
     const Vec6 g = spatial_conditions(b, q);
     v = std::max({v, g.head<3>().norm(), g.tail<3>().norm()});
-    if (b.grip.empty()) continue;
+    if (b.grip.empty() && !b.spin) continue;
     const Index pd = m_model.bodies[b.body].first_dof;
     const Mat3 e = rotation_exp(-q.segment<3>(pd + 3).eval());
     for (const Member& m : b.members) {
       if (m.body >= 0) continue;
-      const Vec3 off = grip_offset(b, m, q, e, q.segment<3>(pd));
-      for (int i : b.grip) v = std::max(v, std::abs(off[i]));
+      if (!b.grip.empty()) {
+        const Vec3 off = grip_offset(b, m, q, e, q.segment<3>(pd));
+        for (int i : b.grip) v = std::max(v, std::abs(off[i]));
+      }
+      if (b.spin) v = std::max(v, std::abs(spin_offset(b, m, q, e)));
     }
   }
   return v;
@@ -224,7 +243,7 @@ Index BodySystem::num_grip_conditions() const {
   Index n = 0;
   for (const Binding& b : m_bindings)
     for (const Member& m : b.members)
-      if (m.body < 0) n += static_cast<Index>(b.grip.size());
+      if (m.body < 0) n += static_cast<Index>(b.grip.size()) + (b.spin ? 1 : 0);
   return n;
 }
 
@@ -234,13 +253,16 @@ void BodySystem::update_multipliers(const VecX& q) {
     const Vec6 g = spatial_conditions(b, q);
     b.lambda.head<3>() += b.k * (dref.transpose() * g.head<3>());
     b.lambda.tail<3>() += b.k * (dref.transpose() * g.tail<3>());
-    if (b.grip.empty()) continue;
+    if (b.grip.empty() && !b.spin) continue;
     const Index pd = m_model.bodies[b.body].first_dof;
     const Mat3 e = rotation_exp(-q.segment<3>(pd + 3).eval());
     for (Member& m : b.members) {
       if (m.body >= 0) continue;
-      const Vec3 off = grip_offset(b, m, q, e, q.segment<3>(pd));
-      for (int i : b.grip) m.grip_lambda[i] += b.kg * off[i];
+      if (!b.grip.empty()) {
+        const Vec3 off = grip_offset(b, m, q, e, q.segment<3>(pd));
+        for (int i : b.grip) m.grip_lambda[i] += b.kg * off[i];
+      }
+      if (b.spin) m.spin_lambda += b.kg * spin_offset(b, m, q, e);
     }
   }
 }
@@ -268,9 +290,11 @@ std::vector<double> BodySystem::multipliers() const {
   out.reserve(6 * m_bindings.size());
   for (const Binding& b : m_bindings) out.insert(out.end(), b.lambda.data(), b.lambda.data() + 6);
   for (const Binding& b : m_bindings)
-    if (!b.grip.empty())
-      for (const Member& m : b.members)
-        if (m.body < 0) out.insert(out.end(), m.grip_lambda.data(), m.grip_lambda.data() + 3);
+    for (const Member& m : b.members) {
+      if (m.body >= 0) continue;
+      if (!b.grip.empty()) out.insert(out.end(), m.grip_lambda.data(), m.grip_lambda.data() + 3);
+      if (b.spin) out.push_back(m.spin_lambda);
+    }
   return out;
 }
 
@@ -279,10 +303,12 @@ void BodySystem::set_multipliers(const std::vector<double>& values) {
     for (int i = 0; i < 6; ++i) m_bindings[k].lambda[i] = values.at(6 * k + i);
   size_t at = 6 * m_bindings.size();
   for (Binding& b : m_bindings)
-    if (!b.grip.empty())
-      for (Member& m : b.members)
-        if (m.body < 0)
-          for (int i = 0; i < 3; ++i) m.grip_lambda[i] = values.at(at++);
+    for (Member& m : b.members) {
+      if (m.body >= 0) continue;
+      if (!b.grip.empty())
+        for (int i = 0; i < 3; ++i) m.grip_lambda[i] = values.at(at++);
+      if (b.spin) m.spin_lambda = values.at(at++);
+    }
 }
 
 std::vector<double> BodySystem::snapshot() const {
@@ -302,8 +328,8 @@ void BodySystem::restore(const std::vector<double>& values) {
   if (values.size() != expected) {
     const size_t averaged = 12 * m_bodies.size() + 6 * m_bindings.size();
     throw std::invalid_argument(
-        values.size() == averaged   ? "the state was saved without the grips this case's bindings have"
-        : expected == averaged      ? "the state was saved with grips this case's bindings do not have"
+        values.size() == averaged   ? "the state was saved without the grips or spin holds this case's bindings have"
+        : expected == averaged      ? "the state was saved with grips or spin holds this case's bindings do not have"
                                     : fmt::format("body state of {} values, {} expected", values.size(), expected));
   }
   const double* v = values.data();
@@ -317,7 +343,70 @@ void BodySystem::restore(const std::vector<double>& values) {
 
 double BodySystem::binding_energy(const Binding& b, const VecX& q, VecX* grad, Eigen::MatrixXd* hess) const {
   const double energy = averaged_energy(b, q, grad, hess);
-  return b.grip.empty() ? energy : energy + grip_energy(b, q, grad, hess);
+  return energy + (b.grip.empty() ? 0.0 : grip_energy(b, q, grad, hess)) +
+         (b.spin ? spin_energy(b, q, grad, hess) : 0.0);
+}
+
+double BodySystem::spin_offset(const Binding& b, const Member& m, const VecX& q, const Mat3& e) const {
+  const Mat3& dref = m_bodies[b.body].frame_ref;
+  const Vec3 g1 = dref.transpose() * (e * q.segment<3>(m.dof + 3));
+  const Vec3 g2 = dref.transpose() * (e * q.segment<3>(m.dof + 6));
+  return 0.5 * std::sqrt(m.r2) * (m.b2.dot(g1) - m.b1.dot(g2)) - m.s0;
+}
+
+double BodySystem::spin_energy(const Binding& b, const VecX& q, VecX* grad, Eigen::MatrixXd* hess) const {
+  // s = r/2 [u2 . e(theta) g1 - u1 . e(theta) g2] - s0 with u_k = D_ref b_k and
+  // e(theta) = exp(-[theta]x): ds/dg1 = r/2 e^T u2, ds/dg2 = -r/2 e^T u1,
+  // ds/dtheta_j = r/2 [u2 . de_j g1 - u1 . de_j g2]; second derivatives d2s/dg1 dtheta_j =
+  // r/2 de_j^T u2, d2s/dg2 dtheta_j = -r/2 de_j^T u1, d2s/dtheta_j dtheta_l =
+  // r/2 [u2 . d2e_jl g1 - u1 . d2e_jl g2]. Energy lambda s + k/2 s^2 per node.
+  const Body& body = m_model.bodies[b.body];
+  const Mat3& dref = m_bodies[b.body].frame_ref;
+  const Index pd = body.first_dof;
+  const bool derivatives = grad || hess;
+  Mat3 dR[3], d2R[9];
+  const Mat3 e = rotation_exp(-q.segment<3>(pd + 3).eval(), derivatives ? dR : nullptr, hess ? d2R : nullptr);
+  Mat3 de[3];
+  if (derivatives)
+    for (int j = 0; j < 3; ++j) de[j] = -dR[j];
+  const int po = b.parent_offset;
+  double energy = 0.0;
+  for (const Member& m : b.members) {
+    if (m.body >= 0) continue;
+    const double s = spin_offset(b, m, q, e);
+    energy += m.spin_lambda * s + 0.5 * b.kg * s * s;
+    if (!derivatives) continue;
+    const double half_r = 0.5 * std::sqrt(m.r2);
+    const Vec3 u1 = dref * m.b1, u2 = dref * m.b2;
+    const Vec3 g1 = q.segment<3>(m.dof + 3), g2 = q.segment<3>(m.dof + 6);
+    const double mu = m.spin_lambda + b.kg * s;
+    // Local gradient of s over (g1, g2, theta).
+    Eigen::Matrix<double, 9, 1> js;
+    js.head<3>() = half_r * (e.transpose() * u2);
+    js.segment<3>(3) = -half_r * (e.transpose() * u1);
+    for (int j = 0; j < 3; ++j) js[6 + j] = half_r * (u2.dot(de[j] * g1) - u1.dot(de[j] * g2));
+    const int at[3] = {m.offset + 3, m.offset + 6, po + 3};
+    if (grad)
+      for (int blk = 0; blk < 3; ++blk) grad->segment<3>(at[blk]) += mu * js.segment<3>(3 * blk);
+    if (!hess) continue;
+    auto& h = *hess;
+    for (int bi = 0; bi < 3; ++bi)
+      for (int bj = 0; bj < 3; ++bj)
+        h.block<3, 3>(at[bi], at[bj]).noalias() += b.kg * js.segment<3>(3 * bi) * js.segment<3>(3 * bj).transpose();
+    Mat3 c1, c2;  // d2s/dg1 dtheta, d2s/dg2 dtheta (rows g, columns theta)
+    for (int j = 0; j < 3; ++j) {
+      c1.col(j) = half_r * (de[j].transpose() * u2);
+      c2.col(j) = -half_r * (de[j].transpose() * u1);
+    }
+    h.block<3, 3>(m.offset + 3, po + 3) += mu * c1;
+    h.block<3, 3>(po + 3, m.offset + 3) += mu * c1.transpose();
+    h.block<3, 3>(m.offset + 6, po + 3) += mu * c2;
+    h.block<3, 3>(po + 3, m.offset + 6) += mu * c2.transpose();
+    for (int j = 0; j < 3; ++j)
+      for (int l = 0; l < 3; ++l)
+        h(po + 3 + j, po + 3 + l) += mu * half_r * (u2.dot(d2R[3 * j + l] * g1) - u1.dot(d2R[3 * j + l] * g2));
+  }
+  return energy;
 }
 
 Vec3 BodySystem::grip_offset(const Binding& b, const Member& m, const VecX& q, const Mat3& e, const Vec3& r) const {
@@ -527,6 +616,14 @@ double BodySystem::evaluate(const VecX& q, const AssemblyTarget& target, bool wa
     scatter_local(target, m_stencils.stencil(k), want_gradient ? &gv : nullptr, want_hessian ? &hv : nullptr);
   }
   return energy;
+}
+
+Eigen::MatrixXd BodySystem::local_hessian(Index k, const VecX& q) const {
+  const Binding& b = m_bindings[k];
+  VecX g = VecX::Zero(b.local_size);
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(b.local_size, b.local_size);
+  binding_energy(b, q, &g, &h);
+  return h;
 }
 
 Mat3 BodySystem::frame(Index b, const VecX& q) const {

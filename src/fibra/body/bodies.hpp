@@ -23,6 +23,13 @@
 /// condition g_mi = D_i . (p_m - R) - c_mi = 0 (c_m: the node's initial position in the body
 /// frame): each end is held by itself along those axes, like a clamp holds the fibers of a
 /// tow, not only in average. Same augmented Lagrangian, one multiplier per condition.
+///
+/// A spin hold (BindingSpec::spin) adds, per bound fiber node, the condition that its section
+/// does not turn about the fiber's axis relative to the body:
+///   s_m = r/2 [ b2 . D^T g1 - b1 . D^T g2 ] - s0_m = 0
+/// with b1, b2 the node's initial section directions in the body frame and r its radius (s is
+/// the spin angle times r, a length like the grip's conditions; tilting the section or
+/// stretching it leaves s unchanged to first order). Same augmented Lagrangian.
 #include <string>
 #include <vector>
 
@@ -79,8 +86,9 @@ class BodySystem {
   double anchor_drift(const VecX& q) const;
   /// Stiffness of the proximal spring [N/m].
   double proximal_stiffness() const { return m_mu; }
-  /// Multipliers of all bindings (6 per binding, body frame), then those of the grips (3 per
-  /// gripped node, zero on axes not gripped), to save and restore.
+  /// Multipliers of all bindings (6 per binding, body frame), then per bound node of the
+  /// bindings with grips or spin holds those of its grip (3, zero on axes not gripped) and of
+  /// its spin hold (1), to save and restore.
   std::vector<double> multipliers() const;
   void set_multipliers(const std::vector<double>& values);  ///< restores multipliers()
   /// The state that outlives an increment: per body the committed frame (9 values, column
@@ -90,8 +98,12 @@ class BodySystem {
   void restore(const std::vector<double>& values);
   /// Penalty of binding k [N/m].
   double stiffness(Index k) const { return m_bindings[k].k; }
-  /// Number of gripped conditions (nodes x gripped axes) of all bindings.
+  /// Number of single-node conditions (grips: nodes x gripped axes; spin holds: nodes) of all
+  /// bindings.
   Index num_grip_conditions() const;
+
+  /// Local Hessian of binding k at q (its stencil's dofs; for developers' diagnostics).
+  Eigen::MatrixXd local_hessian(Index k, const VecX& q) const;
 
   /// Current frame of body b at q.
   Mat3 frame(Index b, const VecX& q) const;
@@ -117,6 +129,9 @@ class BodySystem {
     double r2 = 0;       ///< fiber node: squared section radius (scales its section vectors)
     Eigen::Matrix<double, 9, 1> anchor = Eigen::Matrix<double, 9, 1>::Zero();  ///< proximal anchor (nodes)
     Vec3 grip_lambda = Vec3::Zero();  ///< grip multipliers along the body axes (nodes) [N]
+    Vec3 b1 = Vec3::Zero(), b2 = Vec3::Zero();  ///< initial section directions, body frame (nodes)
+    double s0 = 0;                    ///< initial spin measure (nodes) [m]
+    double spin_lambda = 0;           ///< spin-hold multiplier (nodes) [N]
   };
   struct Binding {
     int body = 0;
@@ -129,6 +144,7 @@ class BodySystem {
     Vec6 lambda = Vec6::Zero();  ///< multipliers, body frame [N]
     std::vector<int> grip;       ///< gripped body axes (0-based)
     double kg = 0;               ///< penalty of each grip condition [N/m]
+    bool spin = false;           ///< each bound node held against spinning about its axis
   };
   struct BodyData {
     Mat3 frame_ref = Mat3::Identity();  ///< D_ref: frame at the start of the increment
@@ -147,6 +163,10 @@ class BodySystem {
   Vec3 grip_offset(const Binding& b, const Member& m, const VecX& q, const Mat3& e, const Vec3& r) const;
   /// Adds the grips' energy of binding b (and their local gradient and Hessian when given).
   double grip_energy(const Binding& b, const VecX& q, VecX* g, Eigen::MatrixXd* h) const;
+  /// Spin condition s_m of node member m of binding b, given e = exp(-[theta]x) [m].
+  double spin_offset(const Binding& b, const Member& m, const VecX& q, const Mat3& e) const;
+  /// Adds the spin holds' energy of binding b (and their local gradient and Hessian when given).
+  double spin_energy(const Binding& b, const VecX& q, VecX* g, Eigen::MatrixXd* h) const;
 
   const Model& m_model;
   std::vector<BodyData> m_bodies;

@@ -1,13 +1,21 @@
 #pragma once
 /// The developers' trace switch: FIBRA_DEBUG_NEWTON set in the environment makes the solver
 /// print every Newton iteration, normal update and cone freeze, and the contact checks say
-/// which pair cut an increment.
+/// which pair cut an increment. FIBRA_DEBUG_CHECKPOINT makes a run also save its state after
+/// every increment (state/checkpoint_STEP_INCREMENT.bin), to study a long run's later
+/// increments without running it again (copy one to state/STEP.bin of a run directory and go
+/// on from it with [start]).
 #include <cstdlib>
 
 namespace fibra {
 
 inline bool debug_newton() {
   static const bool on = std::getenv("FIBRA_DEBUG_NEWTON") != nullptr;
+  return on;
+}
+
+inline bool debug_checkpoint() {
+  static const bool on = std::getenv("FIBRA_DEBUG_CHECKPOINT") != nullptr;
   return on;
 }
 

@@ -1053,7 +1053,7 @@ BindingSpec Reader::read_binding(const Value& t, const std::string& path, std::s
     if (j < generated) return fmt::format("a binding the [fabric] generates (to body \"{}\")", earlier[j].body);
     return fmt::format("binding[{}] (to body \"{}\")", j - generated, earlier[j].body);
   };
-  check_keys(t, path, {"body", "ends", "bodies", "grip"});
+  check_keys(t, path, {"body", "ends", "bodies", "grip", "spin"});
   BindingSpec b;
   b.line = static_cast<int>(k);
   {
@@ -1176,6 +1176,13 @@ BindingSpec Reader::read_binding(const Value& t, const std::string& path, std::s
       fail(key, "a grip holds bound fiber ends, and this binding has none (only `bodies`)", v);
     }
     std::sort(b.grip.begin(), b.grip.end());
+  }
+  if (const Value* v = find(t, "spin")) {
+    b.spin = to_bool(*v, join(path, "spin"));
+    if (b.spin && b.ends.empty()) {
+      fail(join(path, "spin"), "`spin` holds bound fiber ends against turning about their axis, and this binding has "
+                               "none (only `bodies`)", v);
+    }
   }
   return b;
 }

@@ -216,6 +216,7 @@ void write_binding(std::string& out, const BindingSpec& b) {
     for (int a : b.grip) axes += fmt::format("{}{}", axes.empty() ? "" : ", ", a);
     out += fmt::format("grip = [{}]\n", axes);
   }
+  if (b.spin) out += "spin = true\n";
 }
 
 void write_tow(std::string& out, const TowSpec& t) {

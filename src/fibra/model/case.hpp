@@ -109,6 +109,10 @@ struct BindingSpec {
   /// itself at its initial position in the body frame (a grip), not only in average; empty:
   /// the averaged conditions alone (the paper's binding).
   std::vector<int> grip;
+  /// Each bound fiber node is also held by itself against turning about its fiber's axis (its
+  /// section vectors' spin relative to the body): without it a fiber's spin is a mode of
+  /// almost no stiffness where friction alone holds it.
+  bool spin = false;
   int line = 0;                     ///< index of the [[binding]] entry (for messages)
 };
 

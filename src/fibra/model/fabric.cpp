@@ -267,6 +267,7 @@ void expand_fabric(Case& c) {
         start_binding.grip = {dir == 0 ? 2 : 1};
         if (f.grip == FabricSpec::Grip::Clamped) start_binding.grip.push_back(3);
         end_binding.grip = start_binding.grip;
+        start_binding.spin = end_binding.spin = true;
       }
       for (size_t k = 0; k < d.sites.size(); ++k) {
         const Eigen::Vector2d& p = d.sites[k];

@@ -22,6 +22,7 @@
 #include "fibra/model/fabric_report.hpp"
 #include "fibra/model/model.hpp"
 #include "fibra/run/curve_plotter.hpp"
+#include "fibra/core/debug.hpp"
 #include "fibra/solver/solver_state.hpp"
 
 namespace fibra {
@@ -179,6 +180,13 @@ RunReport run_case(const Case& c, const RunOptions& options) {
       }
     }
     // The state at each step's end, for runs that go on from it ([start] from = this directory).
+    if (debug_checkpoint()) {
+      std::error_code ec;
+      std::filesystem::create_directories(writer.dir() + "/state", ec);
+      write_state_file(fmt::format("{}/state/checkpoint_{}_{}.bin", writer.dir(), step_file_stem(info.step),
+                                   info.increment),
+                       solver.save_state(info.step, info.step_index));
+    }
     if (info.step_end) {
       const std::string name = "state/" + step_file_stem(info.step) + ".bin";
       std::error_code ec;

@@ -2,6 +2,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <string>
+
+#include <Eigen/Eigenvalues>
+#include <fmt/format.h>
 
 #include "fibra/solver/nodal_load.hpp"
 
@@ -243,6 +247,127 @@ double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hes
   m_times.assembly += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ++m_times.evaluations;
   return energy;
+}
+
+}  // namespace fibra
+
+namespace fibra {
+
+namespace {
+
+// Smallest eigenvalue of a symmetric matrix relative to its largest magnitude, and the
+// position of the eigenvector's largest component.
+struct LocalSpectrum {
+  double min = 0, relative = 0;
+  Index at = 0;
+};
+
+// Of the rows and columns `keep` of h only (the free dofs).
+LocalSpectrum local_spectrum(const Eigen::MatrixXd& full, const std::vector<Index>& keep) {
+  LocalSpectrum s;
+  Eigen::MatrixXd h(keep.size(), keep.size());
+  for (size_t i = 0; i < keep.size(); ++i)
+    for (size_t j = 0; j < keep.size(); ++j) h(i, j) = full(keep[i], keep[j]);
+  if (h.rows() == 0 || h.isZero(0.0)) return s;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(h);
+  const VecX& v = eig.eigenvalues();
+  const double scale = std::max(std::abs(v[0]), std::abs(v[v.size() - 1]));
+  s.min = v[0];
+  s.relative = v[0] / scale;
+  eig.eigenvectors().col(0).cwiseAbs().maxCoeff(&s.at);
+  s.at = keep[s.at];
+  return s;
+}
+
+}  // namespace
+
+std::string Problem::local_spectra(const VecX& q) const {
+  // Negative beyond rounding: below -1e-10 of the local matrix's largest eigenvalue.
+  constexpr double kRounding = -1e-10;
+  std::string out;
+  // The free local dofs of a stencil (its groups' dofs in order, eliminated ones left out).
+  std::vector<Index> keep;
+  auto free_dofs = [&](std::span<const Index> groups) -> const std::vector<Index>& {
+    keep.clear();
+    Index local = 0;
+    for (Index g : groups)
+      for (int i = 0; i < m_pattern.group_size(g); ++i, ++local)
+        if (!m_fixed[m_pattern.group_dof(g) + i]) keep.push_back(local);
+    return keep;
+  };
+  auto report = [&](const char* what, Index count, Index negative, const LocalSpectrum& worst, Index worst_index,
+                    Index worst_group, int worst_component) {
+    out += fmt::format("  {}: {} of {} local Hessians indefinite", what, negative, count);
+    if (negative > 0)
+      out += fmt::format("; most negative {:.3e} ({:.2e} of its largest) in #{} at group {} component {}",
+                         worst.min, worst.relative, worst_index, worst_group, worst_component);
+    out += "\n";
+  };
+  {
+    Index negative = 0, worst_index = 0;
+    LocalSpectrum worst;
+    ElemVec g;
+    ElemMat h;
+    for (Index s = 0; s < static_cast<Index>(m_model.elements.size()); ++s) {
+      const BeamElement& e = m_model.elements[s];
+      beam_element_energy(e, m_model.sections[e.section], q.data() + e.first_dof, &g, &h);
+      const LocalSpectrum ls = local_spectrum(h, free_dofs(m_beams.stencil(s)));
+      if (ls.relative < kRounding) {
+        ++negative;
+        if (ls.min < worst.min) worst = ls, worst_index = s;
+      }
+    }
+    const Index first = m_model.elements.empty() ? 0 : m_model.elements[worst_index].first_dof;
+    report("beam elements", static_cast<Index>(m_model.elements.size()), negative, worst, worst_index,
+           m_pattern.group_of_dof(first + worst.at), static_cast<int>((first + worst.at) % kNodeDofs));
+  }
+  for (const bool with_friction : {false, true}) {
+    const FrictionParams none{};
+    Index negative = 0, worst_index = 0;
+    LocalSpectrum worst;
+    ContactVec g;
+    ContactMat h;
+    for (Index s = 0; s < m_contact_pairs.size(); ++s) {
+      ContactMat sum = ContactMat::Zero();
+      for (Index k = m_pair_begin[s]; k < m_pair_begin[s + 1]; ++k) {
+        const ContactElement& c = m_contacts[k];
+        contact_element_energy(c, q.data() + m_model.elements[c.a.element].first_dof,
+                               q.data() + m_model.elements[c.b.element].first_dof, with_friction ? m_friction : none,
+                               &g, &h, nullptr);
+        sum += h;
+      }
+      const LocalSpectrum ls = local_spectrum(sum, free_dofs(m_contact_pairs.stencil(s)));
+      if (ls.relative < kRounding) {
+        ++negative;
+        if (ls.min < worst.min) worst = ls, worst_index = s;
+      }
+    }
+    Index group = 0;
+    if (m_contact_pairs.size() > 0) group = m_contact_pairs.stencil(worst_index)[worst.at / kNodeDofs];
+    report(with_friction ? "contact pairs, normal and friction" : "contact pairs, normal only",
+           m_contact_pairs.size(), negative, worst, worst_index, group, static_cast<int>(worst.at % kNodeDofs));
+  }
+  if (m_bodies) {
+    Index negative = 0, worst_index = 0;
+    LocalSpectrum worst;
+    for (Index k = 0; k < m_bodies->num_bindings(); ++k) {
+      const LocalSpectrum ls = local_spectrum(m_bodies->local_hessian(k, q), free_dofs(m_bodies->stencils().stencil(k)));
+      if (ls.relative < kRounding) {
+        ++negative;
+        if (ls.min < worst.min) worst = ls, worst_index = k;
+      }
+    }
+    Index group = 0, local = worst.at;
+    for (Index g : m_bodies->stencils().stencil(worst_index)) {
+      if (local < m_pattern.group_size(g)) {
+        group = g;
+        break;
+      }
+      local -= m_pattern.group_size(g);
+    }
+    report("bindings", m_bodies->num_bindings(), negative, worst, worst_index, group, static_cast<int>(local));
+  }
+  return out;
 }
 
 }  // namespace fibra

@@ -2,6 +2,7 @@
 /// The discrete problem at one load level: total potential Pi(q) = W_beams(q) - loads, its
 /// gradient (f_int - f_ext) and Hessian, with eliminated (fixed or prescribed) dofs.
 #include <array>
+#include <string>
 #include <vector>
 
 #include "fibra/body/bodies.hpp"
@@ -69,6 +70,11 @@ class Problem {
   /// Sets the state from which moment work is measured in evaluate()'s energy (moment
   /// potentials are only defined up to whole turns, so energies are compared near this state).
   void set_energy_base(const VecX& q) { m_energy_base = q; }
+  /// Developers' diagnostic of an indefinite tangent: the local Hessians of the beam elements,
+  /// the contact pairs and the bindings at q whose smallest eigenvalue is negative (beyond
+  /// rounding), the worst of each kind with its groups. A sum of positive semi-definite local
+  /// matrices is positive semi-definite: the terms listed are where negative curvature comes from.
+  std::string local_spectra(const VecX& q) const;
   /// Total potential energy at q; fills the gradient of Pi on every dof (f_int - f_ext) and
   /// the Hessian values (free-free block; eliminated dofs get a unit-scaled diagonal).
   double evaluate(const VecX& q, VecX* gradient, std::vector<double>* hessian);

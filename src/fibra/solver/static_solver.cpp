@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <numbers>
+#include <numeric>
 #include <fmt/format.h>
 #include <map>
 
@@ -389,6 +390,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
   double last_step = std::numeric_limits<double>::infinity();
   bool prev_small_step = false;
   bool damped = false;  // the last step came from a factorization with a non-negligible shift
+  bool spectra_printed = false;
   // Floor for the reference force: the force that strains the stiffest fiber by 1e-5. Round-off
   // in the internal forces is about eps * E A per dof, so residuals relative to a smaller
   // reference (an unloaded step) could never converge.
@@ -482,6 +484,36 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       m_stats.time_factorization += seconds_since(t0);
       m_stats.factor_nonzeros = m_linear->factor_nonzeros();
       if (st != FactorStatus::Ok) return false;
+      if (shift > 0.0 && debug_newton() && !spectra_printed) {
+        // Once per solve: which local terms bring the negative curvature.
+        spectra_printed = true;
+        fmt::print(stderr, "  indefinite tangent (shift {:.2e}); local Hessians:\n{}", shift,
+                   m_problem->local_spectra(m_q));
+        // The tangent's softest mode, by inverse iteration with the shifted factor.
+        VecX v = VecX::Ones(n), w(n), hv(n);
+        for (Index d = 0; d < n; ++d)
+          if (fixed[d]) v[d] = 0.0;
+        for (int it = 0; it < 30; ++it) {
+          v /= v.norm();
+          m_linear->solve(v, w);
+          for (Index d = 0; d < n; ++d)
+            if (fixed[d]) w[d] = 0.0;
+          v = w;
+        }
+        v /= v.norm();
+        std::vector<VecX> scratch;
+        symmetric_multiply(m_problem->pattern(), m_hessian, 0.0, v, hv, scratch);
+        fmt::print(stderr, "  softest mode: v.Hv = {:.3e} (mean diagonal {:.3e}); largest components:", v.dot(hv),
+                   mean_diag);
+        std::vector<Index> order(n);
+        std::iota(order.begin(), order.end(), Index{0});
+        std::partial_sort(order.begin(), order.begin() + 12, order.end(),
+                          [&](Index a, Index b) { return std::abs(v[a]) > std::abs(v[b]); });
+        for (int i = 0; i < 12; ++i)
+          fmt::print(stderr, " {:.3f}@{}.{}", v[order[i]], m_problem->pattern().group_of_dof(order[i]),
+                     order[i] - m_problem->pattern().group_dof(m_problem->pattern().group_of_dof(order[i])));
+        fmt::print(stderr, "\n");
+      }
       // Only the factor of a (nearly) unshifted tangent preconditions later iterations.
       m_reuse_factor = shift <= 1e-10 * mean_diag;
       damped = !m_reuse_factor;
