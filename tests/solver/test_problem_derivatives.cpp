@@ -388,3 +388,43 @@ TEST(MomentLoad, AxisAlongAReferenceVectorUpToRoundingAddsNoStiffnessOnIt) {
 
 }  // namespace
 }  // namespace fibra
+
+namespace fibra {
+namespace {
+
+// The developers' diagnostic of indefinite tangents (Problem::local_spectra): a straight fiber
+// at rest has positive semi-definite element Hessians; squeezed to half its length (St
+// Venant-Kirchhoff softens and turns unstable below a stretch of 1/sqrt(3)) every element's
+// Hessian has a negative eigenvalue, and the report names the elements and counts them.
+TEST(ProblemDiagnostics, LocalSpectraFindTheIndefiniteElements) {
+  const Case c = parse_case_toml(R"(
+[[material]]
+name = "m"
+young = 1e9
+poisson = 0.3
+[[fiber]]
+name = "a"
+material = "m"
+radius = 0.01
+elements = 4
+points = [[0, 0, 0], [1, 0, 0]]
+[[step]]
+name = "s"
+)",
+                                 "straight.toml");
+  const Model model = build_model(c);
+  Problem p(model);
+  const std::string rest = p.local_spectra(model.reference);
+  EXPECT_NE(rest.find("beam elements: 0 of 4 local Hessians indefinite"), std::string::npos) << rest;
+  VecX q = model.reference;
+  for (Index n = 0; n < model.num_nodes(); ++n) q[9 * n] *= 0.5;
+  const std::string squeezed = p.local_spectra(q);
+  EXPECT_NE(squeezed.find("beam elements: 4 of 4 local Hessians indefinite; most negative -"), std::string::npos)
+      << squeezed;
+  // Stretched by 20 %: stable again.
+  for (Index n = 0; n < model.num_nodes(); ++n) q[9 * n] = 1.2 * model.reference[9 * n];
+  EXPECT_NE(p.local_spectra(q).find("beam elements: 0 of 4"), std::string::npos) << p.local_spectra(q);
+}
+
+}  // namespace
+}  // namespace fibra
