@@ -12,7 +12,8 @@
 //                                 also member_evals_per_second (bound members per second);
 //                                 T OpenMP threads (used only inside Eigen's GEMM)
 //   BM_BindingEnergyGripped       the same (1 thread) with every tow end gripped across its
-//                                 tow (grip = [2, 3] / [1, 3]: 1 920 grip conditions more)
+//                                 tow (grip = [2, 3] / [1, 3]) and its spin held (spin = true):
+//                                 2 880 single-node conditions more
 //   BM_BindingGradient            the same, energy + gradient only (1 thread, as the rest)
 //   BM_BindingScatter             the scatter_local calls of BM_BindingEnergy alone (a dense
 //                                 local matrix per binding), to split kernel and scatter
@@ -92,7 +93,8 @@ std::vector<std::pair<double, double>> tow_section() {
 }
 
 /// The fabric as a case file (see the header comment); `grip`: every tow-end binding also
-/// holds each fiber end across its tow (grip = [2, 3] for x tows, [1, 3] for y tows).
+/// holds each fiber end across its tow (grip = [2, 3] for x tows, [1, 3] for y tows) and
+/// against spinning about its axis (spin = true).
 std::string fabric_toml(bool grip) {
   std::ostringstream s;
   s.precision(17);
@@ -135,7 +137,7 @@ std::string fabric_toml(bool grip) {
       for (int f = 0; f < kFibersPerTow; ++f)
         s << (f ? ", " : "") << "{ fiber = \"" << t.name << "f" << f << "\", node = \"" << end_names[e] << "\" }";
       s << "]\n";
-      if (grip) s << (t.axis == 0 ? "grip = [2, 3]\n" : "grip = [1, 3]\n");
+      if (grip) s << (t.axis == 0 ? "grip = [2, 3]\nspin = true\n" : "grip = [1, 3]\nspin = true\n");
     }
   // Edge bodies: the 5 tow ends of one edge (x = 0, x = L for the x tows; y = 0, y = L for the y tows).
   const double mid = 0.5 * kTowsPerDirection * kTowSpacing;
