@@ -342,9 +342,21 @@ void BodySystem::restore(const std::vector<double>& values) {
 }
 
 double BodySystem::binding_energy(const Binding& b, const VecX& q, VecX* grad, Eigen::MatrixXd* hess) const {
-  const double energy = averaged_energy(b, q, grad, hess);
-  return energy + (b.grip.empty() ? 0.0 : grip_energy(b, q, grad, hess)) +
-         (b.spin ? spin_energy(b, q, grad, hess) : 0.0);
+  const Turn t = turn(b, q, grad || hess, hess != nullptr);
+  const double energy = averaged_energy(b, q, t, grad, hess);
+  return energy + (b.grip.empty() ? 0.0 : grip_energy(b, q, t, grad, hess)) +
+         (b.spin ? spin_energy(b, q, t, grad, hess) : 0.0);
+}
+
+BodySystem::Turn BodySystem::turn(const Binding& b, const VecX& q, bool first, bool second) const {
+  Turn t;
+  Mat3 dR[3];
+  // e(theta) = R(-theta): its first derivatives change sign, its second ones keep it.
+  t.e = rotation_exp(-q.segment<3>(m_model.bodies[b.body].first_dof + 3).eval(), first ? dR : nullptr,
+                     second ? t.d2e : nullptr);
+  if (first)
+    for (int j = 0; j < 3; ++j) t.de[j] = -dR[j];
+  return t;
 }
 
 double BodySystem::spin_offset(const Binding& b, const Member& m, const VecX& q, const Mat3& e) const {
@@ -354,21 +366,18 @@ double BodySystem::spin_offset(const Binding& b, const Member& m, const VecX& q,
   return 0.5 * std::sqrt(m.r2) * (m.b2.dot(g1) - m.b1.dot(g2)) - m.s0;
 }
 
-double BodySystem::spin_energy(const Binding& b, const VecX& q, VecX* grad, Eigen::MatrixXd* hess) const {
+double BodySystem::spin_energy(const Binding& b, const VecX& q, const Turn& t, VecX* grad,
+                               Eigen::MatrixXd* hess) const {
   // s = r/2 [u2 . e(theta) g1 - u1 . e(theta) g2] - s0 with u_k = D_ref b_k and
   // e(theta) = exp(-[theta]x): ds/dg1 = r/2 e^T u2, ds/dg2 = -r/2 e^T u1,
   // ds/dtheta_j = r/2 [u2 . de_j g1 - u1 . de_j g2]; second derivatives d2s/dg1 dtheta_j =
   // r/2 de_j^T u2, d2s/dg2 dtheta_j = -r/2 de_j^T u1, d2s/dtheta_j dtheta_l =
   // r/2 [u2 . d2e_jl g1 - u1 . d2e_jl g2]. Energy lambda s + k/2 s^2 per node.
-  const Body& body = m_model.bodies[b.body];
   const Mat3& dref = m_bodies[b.body].frame_ref;
-  const Index pd = body.first_dof;
   const bool derivatives = grad || hess;
-  Mat3 dR[3], d2R[9];
-  const Mat3 e = rotation_exp(-q.segment<3>(pd + 3).eval(), derivatives ? dR : nullptr, hess ? d2R : nullptr);
-  Mat3 de[3];
-  if (derivatives)
-    for (int j = 0; j < 3; ++j) de[j] = -dR[j];
+  const Mat3& e = t.e;
+  const Mat3* de = t.de;
+  const Mat3* d2e = t.d2e;
   const int po = b.parent_offset;
   double energy = 0.0;
   for (const Member& m : b.members) {
@@ -404,7 +413,7 @@ double BodySystem::spin_energy(const Binding& b, const VecX& q, VecX* grad, Eige
     h.block<3, 3>(po + 3, m.offset + 6) += mu * c2.transpose();
     for (int j = 0; j < 3; ++j)
       for (int l = 0; l < 3; ++l)
-        h(po + 3 + j, po + 3 + l) += mu * half_r * (u2.dot(d2R[3 * j + l] * g1) - u1.dot(d2R[3 * j + l] * g2));
+        h(po + 3 + j, po + 3 + l) += mu * half_r * (u2.dot(d2e[3 * j + l] * g1) - u1.dot(d2e[3 * j + l] * g2));
   }
   return energy;
 }
@@ -413,21 +422,18 @@ Vec3 BodySystem::grip_offset(const Binding& b, const Member& m, const VecX& q, c
   return m_bodies[b.body].frame_ref.transpose() * (e * (q.segment<3>(m.dof) - r)) - (b.mean + m.a);
 }
 
-double BodySystem::grip_energy(const Binding& b, const VecX& q, VecX* grad, Eigen::MatrixXd* hess) const {
+double BodySystem::grip_energy(const Binding& b, const VecX& q, const Turn& t, VecX* grad,
+                               Eigen::MatrixXd* hess) const {
   // g = d_i . e(theta) (p - R) - c_i with d_i the body's axis i at the increment start and
   // e(theta) = exp(-[theta]x): dg/dp = e^T d_i = -dg/dR, dg/dtheta_j = d_i . de_j (p - R);
   // second derivatives d2g/dp dtheta_j = de_j^T d_i = -d2g/dR dtheta_j and
   // d2g/dtheta_j dtheta_l = d_i . d2e_jl (p - R). Energy lambda g + k/2 g^2 per condition.
-  const Body& body = m_model.bodies[b.body];
   const Mat3& dref = m_bodies[b.body].frame_ref;
-  const Index pd = body.first_dof;
-  const Vec3 r = q.segment<3>(pd);
+  const Vec3 r = q.segment<3>(m_model.bodies[b.body].first_dof);
   const bool derivatives = grad || hess;
-  Mat3 dR[3], d2R[9];
-  const Mat3 e = rotation_exp(-q.segment<3>(pd + 3).eval(), derivatives ? dR : nullptr, hess ? d2R : nullptr);
-  Mat3 de[3];
-  if (derivatives)
-    for (int j = 0; j < 3; ++j) de[j] = -dR[j];
+  const Mat3& e = t.e;
+  const Mat3* de = t.de;
+  const Mat3* d2e = t.d2e;
   const int po = b.parent_offset;
   double energy = 0.0;
   for (const Member& m : b.members) {
@@ -462,24 +468,22 @@ double BodySystem::grip_energy(const Binding& b, const VecX& q, VecX* grad, Eige
       h.block<3, 3>(po, po + 3) -= mu * cross;
       h.block<3, 3>(po + 3, po) -= mu * cross.transpose();
       for (int j = 0; j < 3; ++j)
-        for (int l = 0; l < 3; ++l) h(po + 3 + j, po + 3 + l) += mu * d.dot(d2R[3 * j + l] * v);
+        for (int l = 0; l < 3; ++l) h(po + 3 + j, po + 3 + l) += mu * d.dot(d2e[3 * j + l] * v);
     }
   }
   return energy;
 }
 
-double BodySystem::averaged_energy(const Binding& b, const VecX& q, VecX* grad, Eigen::MatrixXd* hess) const {
+double BodySystem::averaged_energy(const Binding& b, const VecX& q, const Turn& turned, VecX* grad,
+                                   Eigen::MatrixXd* hess) const {
   const Body& body = m_model.bodies[b.body];
   const Mat3& dref = m_bodies[b.body].frame_ref;
   const Index pd = body.first_dof;
   const Vec3 r = q.segment<3>(pd);
-  const Vec3 theta = q.segment<3>(pd + 3);
-  Mat3 dR[3], d2R[9];
   const bool derivatives = grad || hess;
-  const Mat3 e = rotation_exp(-theta, derivatives ? dR : nullptr, hess ? d2R : nullptr);
-  Mat3 de[3];  // d/dtheta of R(-theta); second derivatives keep their sign
-  if (derivatives)
-    for (int j = 0; j < 3; ++j) de[j] = -dR[j];
+  const Mat3& e = turned.e;
+  const Mat3* de = turned.de;
+  const Mat3* d2R = turned.d2e;
   const double n = static_cast<double>(b.members.size());
   const double w = 1.0 / (n * b.s);
 

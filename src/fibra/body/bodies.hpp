@@ -151,10 +151,18 @@ class BodySystem {
     Vec3 rotation = Vec3::Zero();       ///< accumulated rotation components
     double size = 0;
   };
+  /// A body's incremental turn e(theta) = exp(-[theta]x) (D^T v = D_ref^T e v) and, when
+  /// asked, its first derivatives de_j and second derivatives d2e_jl (index 3 j + l).
+  struct Turn {
+    Mat3 e;
+    Mat3 de[3];
+    Mat3 d2e[9];
+  };
+  Turn turn(const Binding& b, const VecX& q, bool first, bool second) const;
   /// Energy of binding k with its grips (local gradient and Hessian when given, sized local_size).
   double binding_energy(const Binding& b, const VecX& q, VecX* g, Eigen::MatrixXd* h) const;
   /// The averaged conditions' part of binding_energy (sets g and h; the grips add to them).
-  double averaged_energy(const Binding& b, const VecX& q, VecX* g, Eigen::MatrixXd* h) const;
+  double averaged_energy(const Binding& b, const VecX& q, const Turn& turned, VecX* g, Eigen::MatrixXd* h) const;
   /// Conditions of binding b in the spatial frame of the start of the increment (D_ref g).
   Vec6 spatial_conditions(const Binding& b, const VecX& q) const;
   /// Offset of node member m of binding b from its initial place in the body frame,
@@ -162,11 +170,11 @@ class BodySystem {
   /// components along the gripped axes are the grip conditions [m].
   Vec3 grip_offset(const Binding& b, const Member& m, const VecX& q, const Mat3& e, const Vec3& r) const;
   /// Adds the grips' energy of binding b (and their local gradient and Hessian when given).
-  double grip_energy(const Binding& b, const VecX& q, VecX* g, Eigen::MatrixXd* h) const;
+  double grip_energy(const Binding& b, const VecX& q, const Turn& t, VecX* g, Eigen::MatrixXd* h) const;
   /// Spin condition s_m of node member m of binding b, given e = exp(-[theta]x) [m].
   double spin_offset(const Binding& b, const Member& m, const VecX& q, const Mat3& e) const;
   /// Adds the spin holds' energy of binding b (and their local gradient and Hessian when given).
-  double spin_energy(const Binding& b, const VecX& q, VecX* g, Eigen::MatrixXd* h) const;
+  double spin_energy(const Binding& b, const VecX& q, const Turn& t, VecX* g, Eigen::MatrixXd* h) const;
 
   const Model& m_model;
   std::vector<BodyData> m_bodies;
