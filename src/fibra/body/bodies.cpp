@@ -375,14 +375,11 @@ double BodySystem::spin_energy(const Binding& b, const VecX& q, const Turn& t, V
   // r/2 [u2 . d2e_jl g1 - u1 . d2e_jl g2]. Energy lambda s + k/2 s^2 per node.
   const Mat3& dref = m_bodies[b.body].frame_ref;
   const bool derivatives = grad || hess;
-  const Mat3& e = t.e;
-  const Mat3* de = t.de;
-  const Mat3* d2e = t.d2e;
   const int po = b.parent_offset;
   double energy = 0.0;
   for (const Member& m : b.members) {
     if (m.body >= 0) continue;
-    const double s = spin_offset(b, m, q, e);
+    const double s = spin_offset(b, m, q, t.e);
     energy += m.spin_lambda * s + 0.5 * b.kg * s * s;
     if (!derivatives) continue;
     const double half_r = 0.5 * std::sqrt(m.r2);
@@ -391,9 +388,9 @@ double BodySystem::spin_energy(const Binding& b, const VecX& q, const Turn& t, V
     const double mu = m.spin_lambda + b.kg * s;
     // Local gradient of s over (g1, g2, theta).
     Eigen::Matrix<double, 9, 1> js;
-    js.head<3>() = half_r * (e.transpose() * u2);
-    js.segment<3>(3) = -half_r * (e.transpose() * u1);
-    for (int j = 0; j < 3; ++j) js[6 + j] = half_r * (u2.dot(de[j] * g1) - u1.dot(de[j] * g2));
+    js.head<3>() = half_r * (t.e.transpose() * u2);
+    js.segment<3>(3) = -half_r * (t.e.transpose() * u1);
+    for (int j = 0; j < 3; ++j) js[6 + j] = half_r * (u2.dot(t.de[j] * g1) - u1.dot(t.de[j] * g2));
     const int at[3] = {m.offset + 3, m.offset + 6, po + 3};
     if (grad)
       for (int blk = 0; blk < 3; ++blk) grad->segment<3>(at[blk]) += mu * js.segment<3>(3 * blk);
@@ -404,8 +401,8 @@ double BodySystem::spin_energy(const Binding& b, const VecX& q, const Turn& t, V
         h.block<3, 3>(at[bi], at[bj]).noalias() += b.kg * js.segment<3>(3 * bi) * js.segment<3>(3 * bj).transpose();
     Mat3 c1, c2;  // d2s/dg1 dtheta, d2s/dg2 dtheta (rows g, columns theta)
     for (int j = 0; j < 3; ++j) {
-      c1.col(j) = half_r * (de[j].transpose() * u2);
-      c2.col(j) = -half_r * (de[j].transpose() * u1);
+      c1.col(j) = half_r * (t.de[j].transpose() * u2);
+      c2.col(j) = -half_r * (t.de[j].transpose() * u1);
     }
     h.block<3, 3>(m.offset + 3, po + 3) += mu * c1;
     h.block<3, 3>(po + 3, m.offset + 3) += mu * c1.transpose();
@@ -413,7 +410,7 @@ double BodySystem::spin_energy(const Binding& b, const VecX& q, const Turn& t, V
     h.block<3, 3>(po + 3, m.offset + 6) += mu * c2.transpose();
     for (int j = 0; j < 3; ++j)
       for (int l = 0; l < 3; ++l)
-        h(po + 3 + j, po + 3 + l) += mu * half_r * (u2.dot(d2e[3 * j + l] * g1) - u1.dot(d2e[3 * j + l] * g2));
+        h(po + 3 + j, po + 3 + l) += mu * half_r * (u2.dot(t.d2e[3 * j + l] * g1) - u1.dot(t.d2e[3 * j + l] * g2));
   }
   return energy;
 }
@@ -431,15 +428,12 @@ double BodySystem::grip_energy(const Binding& b, const VecX& q, const Turn& t, V
   const Mat3& dref = m_bodies[b.body].frame_ref;
   const Vec3 r = q.segment<3>(m_model.bodies[b.body].first_dof);
   const bool derivatives = grad || hess;
-  const Mat3& e = t.e;
-  const Mat3* de = t.de;
-  const Mat3* d2e = t.d2e;
   const int po = b.parent_offset;
   double energy = 0.0;
   for (const Member& m : b.members) {
     if (m.body >= 0) continue;
     const Vec3 v = q.segment<3>(m.dof) - r;
-    const Vec3 off = grip_offset(b, m, q, e, r);
+    const Vec3 off = grip_offset(b, m, q, t.e, r);
     for (int i : b.grip) {
       const Vec3 d = dref.col(i);
       const double g = off[i];
@@ -449,9 +443,9 @@ double BodySystem::grip_energy(const Binding& b, const VecX& q, const Turn& t, V
       const double mu = lambda + b.kg * g;
       // Local gradient of g over (p, R, theta).
       Eigen::Matrix<double, 9, 1> jg;
-      jg.head<3>() = e.transpose() * d;
+      jg.head<3>() = t.e.transpose() * d;
       jg.segment<3>(3) = -jg.head<3>();
-      for (int j = 0; j < 3; ++j) jg[6 + j] = d.dot(de[j] * v);
+      for (int j = 0; j < 3; ++j) jg[6 + j] = d.dot(t.de[j] * v);
       const int at[3] = {m.offset, po, po + 3};
       if (grad)
         for (int blk = 0; blk < 3; ++blk) grad->segment<3>(at[blk]) += mu * jg.segment<3>(3 * blk);
@@ -462,13 +456,13 @@ double BodySystem::grip_energy(const Binding& b, const VecX& q, const Turn& t, V
           h.block<3, 3>(at[bi], at[bj]).noalias() +=
               b.kg * jg.segment<3>(3 * bi) * jg.segment<3>(3 * bj).transpose();
       Mat3 cross;  // d2g/dp dtheta (rows p, columns theta)
-      for (int j = 0; j < 3; ++j) cross.col(j) = de[j].transpose() * d;
+      for (int j = 0; j < 3; ++j) cross.col(j) = t.de[j].transpose() * d;
       h.block<3, 3>(m.offset, po + 3) += mu * cross;
       h.block<3, 3>(po + 3, m.offset) += mu * cross.transpose();
       h.block<3, 3>(po, po + 3) -= mu * cross;
       h.block<3, 3>(po + 3, po) -= mu * cross.transpose();
       for (int j = 0; j < 3; ++j)
-        for (int l = 0; l < 3; ++l) h(po + 3 + j, po + 3 + l) += mu * d.dot(d2e[3 * j + l] * v);
+        for (int l = 0; l < 3; ++l) h(po + 3 + j, po + 3 + l) += mu * d.dot(t.d2e[3 * j + l] * v);
     }
   }
   return energy;
