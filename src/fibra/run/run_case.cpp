@@ -13,6 +13,7 @@
 #include <numbers>
 #include <nlohmann/json.hpp>
 
+#include "fibra/core/debug.hpp"
 #include "fibra/core/error.hpp"
 #include "fibra/core/file.hpp"
 #include "fibra/io/case_writer.hpp"
@@ -22,7 +23,6 @@
 #include "fibra/model/fabric_report.hpp"
 #include "fibra/model/model.hpp"
 #include "fibra/run/curve_plotter.hpp"
-#include "fibra/core/debug.hpp"
 #include "fibra/solver/solver_state.hpp"
 
 namespace fibra {
@@ -179,19 +179,18 @@ RunReport run_case(const Case& c, const RunOptions& options) {
           slice_files.push_back("slices/" + step_file_stem(info.step) + name);
       }
     }
-    // The state at each step's end, for runs that go on from it ([start] from = this directory).
-    if (debug_checkpoint()) {
+    // The state at each step's end, for runs that go on from it ([start] from = this directory),
+    // and with FIBRA_DEBUG_CHECKPOINT after every increment.
+    auto save = [&](const std::string& name, int steps_done) {
       std::error_code ec;
       std::filesystem::create_directories(writer.dir() + "/state", ec);
-      write_state_file(fmt::format("{}/state/checkpoint_{}_{}.bin", writer.dir(), step_file_stem(info.step),
-                                   info.increment),
-                       solver.save_state(info.step, info.step_index));
-    }
+      write_state_file(writer.dir() + "/" + name, solver.save_state(info.step, steps_done));
+    };
+    if (debug_checkpoint())
+      save(fmt::format("state/checkpoint_{}_{}.bin", step_file_stem(info.step), info.increment), info.step_index);
     if (info.step_end) {
       const std::string name = "state/" + step_file_stem(info.step) + ".bin";
-      std::error_code ec;
-      std::filesystem::create_directories(writer.dir() + "/state", ec);
-      write_state_file(writer.dir() + "/" + name, solver.save_state(info.step, info.step_index + 1));
+      save(name, info.step_index + 1);
       states.push_back({{"step", info.step}, {"file", name}});
     }
     const bool vtu = info.step_end || info.total_increments % c.output.every == 0;

@@ -284,7 +284,6 @@ LocalSpectrum local_spectrum(const Eigen::MatrixXd& full, const std::vector<Inde
 std::string Problem::local_spectra(const VecX& q) const {
   // Negative beyond rounding: below -1e-10 of the local matrix's largest eigenvalue.
   constexpr double kRounding = -1e-10;
-  std::string out;
   // The free local dofs of a stencil (its groups' dofs in order, eliminated ones left out).
   std::vector<Index> keep;
   auto free_dofs = [&](std::span<const Index> groups) -> const std::vector<Index>& {
@@ -295,78 +294,58 @@ std::string Problem::local_spectra(const VecX& q) const {
         if (!m_fixed[m_pattern.group_dof(g) + i]) keep.push_back(local);
     return keep;
   };
-  auto report = [&](const char* what, Index count, Index negative, const LocalSpectrum& worst, Index worst_index,
-                    Index worst_group, int worst_component) {
+  std::string out;
+  // One kind of local matrix: `spectrum(s)` of each of its `count` stencils in `set`.
+  auto survey = [&](const char* what, const StencilSet& set, Index count, auto&& spectrum) {
+    Index negative = 0, worst_index = 0;
+    LocalSpectrum worst;
+    for (Index s = 0; s < count; ++s) {
+      const LocalSpectrum ls = spectrum(s);
+      if (ls.relative >= kRounding) continue;
+      ++negative;
+      if (ls.min < worst.min) worst = ls, worst_index = s;
+    }
     out += fmt::format("  {}: {} of {} local Hessians indefinite", what, negative, count);
-    if (negative > 0)
+    if (negative > 0) {
+      // The local dof of the eigenvector's largest component, as a group and a component.
+      Index group = 0, local = worst.at;
+      for (Index g : set.stencil(worst_index)) {
+        group = g;
+        if (local < m_pattern.group_size(g)) break;
+        local -= m_pattern.group_size(g);
+      }
       out += fmt::format("; most negative {:.3e} ({:.2e} of its largest) in #{} at group {} component {}",
-                         worst.min, worst.relative, worst_index, worst_group, worst_component);
+                         worst.min, worst.relative, worst_index, group, local);
+    }
     out += "\n";
   };
-  {
-    Index negative = 0, worst_index = 0;
-    LocalSpectrum worst;
-    ElemVec g;
-    ElemMat h;
-    for (Index s = 0; s < static_cast<Index>(m_model.elements.size()); ++s) {
-      const BeamElement& e = m_model.elements[s];
-      beam_element_energy(e, m_model.sections[e.section], q.data() + e.first_dof, &g, &h);
-      const LocalSpectrum ls = local_spectrum(h, free_dofs(m_beams.stencil(s)));
-      if (ls.relative < kRounding) {
-        ++negative;
-        if (ls.min < worst.min) worst = ls, worst_index = s;
-      }
-    }
-    const Index first = m_model.elements.empty() ? 0 : m_model.elements[worst_index].first_dof;
-    report("beam elements", static_cast<Index>(m_model.elements.size()), negative, worst, worst_index,
-           m_pattern.group_of_dof(first + worst.at), static_cast<int>((first + worst.at) % kNodeDofs));
-  }
+  ElemVec ge;
+  ElemMat he;
+  survey("beam elements", m_beams, static_cast<Index>(m_model.elements.size()), [&](Index s) {
+    const BeamElement& e = m_model.elements[s];
+    beam_element_energy(e, m_model.sections[e.section], q.data() + e.first_dof, &ge, &he);
+    return local_spectrum(he, free_dofs(m_beams.stencil(s)));
+  });
   for (const bool with_friction : {false, true}) {
-    const FrictionParams none{};
-    Index negative = 0, worst_index = 0;
-    LocalSpectrum worst;
-    ContactVec g;
-    ContactMat h;
-    for (Index s = 0; s < m_contact_pairs.size(); ++s) {
-      ContactMat sum = ContactMat::Zero();
-      for (Index k = m_pair_begin[s]; k < m_pair_begin[s + 1]; ++k) {
-        const ContactElement& c = m_contacts[k];
-        contact_element_energy(c, q.data() + m_model.elements[c.a.element].first_dof,
-                               q.data() + m_model.elements[c.b.element].first_dof, with_friction ? m_friction : none,
-                               &g, &h, nullptr);
-        sum += h;
-      }
-      const LocalSpectrum ls = local_spectrum(sum, free_dofs(m_contact_pairs.stencil(s)));
-      if (ls.relative < kRounding) {
-        ++negative;
-        if (ls.min < worst.min) worst = ls, worst_index = s;
-      }
-    }
-    Index group = 0;
-    if (m_contact_pairs.size() > 0) group = m_contact_pairs.stencil(worst_index)[worst.at / kNodeDofs];
-    report(with_friction ? "contact pairs, normal and friction" : "contact pairs, normal only",
-           m_contact_pairs.size(), negative, worst, worst_index, group, static_cast<int>(worst.at % kNodeDofs));
+    const FrictionParams friction = with_friction ? m_friction : FrictionParams{};
+    ContactVec gc;
+    ContactMat hc;
+    survey(with_friction ? "contact pairs, normal and friction" : "contact pairs, normal only", m_contact_pairs,
+           m_contact_pairs.size(), [&](Index s) {
+             ContactMat sum = ContactMat::Zero();
+             for (Index k = m_pair_begin[s]; k < m_pair_begin[s + 1]; ++k) {
+               const ContactElement& c = m_contacts[k];
+               contact_element_energy(c, q.data() + m_model.elements[c.a.element].first_dof,
+                                      q.data() + m_model.elements[c.b.element].first_dof, friction, &gc, &hc, nullptr);
+               sum += hc;
+             }
+             return local_spectrum(sum, free_dofs(m_contact_pairs.stencil(s)));
+           });
   }
-  if (m_bodies) {
-    Index negative = 0, worst_index = 0;
-    LocalSpectrum worst;
-    for (Index k = 0; k < m_bodies->num_bindings(); ++k) {
-      const LocalSpectrum ls = local_spectrum(m_bodies->local_hessian(k, q), free_dofs(m_bodies->stencils().stencil(k)));
-      if (ls.relative < kRounding) {
-        ++negative;
-        if (ls.min < worst.min) worst = ls, worst_index = k;
-      }
-    }
-    Index group = 0, local = worst.at;
-    for (Index g : m_bodies->stencils().stencil(worst_index)) {
-      if (local < m_pattern.group_size(g)) {
-        group = g;
-        break;
-      }
-      local -= m_pattern.group_size(g);
-    }
-    report("bindings", m_bodies->num_bindings(), negative, worst, worst_index, group, static_cast<int>(local));
-  }
+  if (m_bodies)
+    survey("bindings", m_bodies->stencils(), m_bodies->num_bindings(), [&](Index k) {
+      return local_spectrum(m_bodies->local_hessian(k, q), free_dofs(m_bodies->stencils().stencil(k)));
+    });
   return out;
 }
 

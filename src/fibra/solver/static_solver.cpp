@@ -381,6 +381,35 @@ bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, do
   }
 }
 
+void StaticSolver::print_indefinite_tangent(double shift, double mean_diag) {
+  fmt::print(stderr, "  indefinite tangent (shift {:.2e}); local Hessians:\n{}", shift, m_problem->local_spectra(m_q));
+  const std::vector<char>& fixed = m_problem->fixed();
+  const Index n = m_q.size();
+  VecX v = VecX::Ones(n), w(n), hv(n);
+  for (int it = 0; it <= 30; ++it) {
+    for (Index d = 0; d < n; ++d)
+      if (fixed[d]) v[d] = 0.0;
+    v /= v.norm();
+    if (it == 30) break;
+    m_linear->solve(v, w);
+    v = w;
+  }
+  std::vector<VecX> scratch;
+  symmetric_multiply(m_problem->pattern(), m_hessian, 0.0, v, hv, scratch);
+  fmt::print(stderr, "  softest mode: v.Hv = {:.3e} (mean diagonal {:.3e}); largest components:", v.dot(hv), mean_diag);
+  std::vector<Index> order(n);
+  std::iota(order.begin(), order.end(), Index{0});
+  const Index shown = std::min<Index>(n, 12);
+  std::partial_sort(order.begin(), order.begin() + shown, order.end(),
+                    [&](Index a, Index b) { return std::abs(v[a]) > std::abs(v[b]); });
+  const BlockPattern& p = m_problem->pattern();
+  for (Index i = 0; i < shown; ++i) {
+    const Index g = p.group_of_dof(order[i]);
+    fmt::print(stderr, " {:.3f}@{}.{}", v[order[i]], g, order[i] - p.group_dof(g));
+  }
+  fmt::print(stderr, "\n");
+}
+
 bool StaticSolver::newton(std::vector<double>& history, int& iterations, double& residual) {
   const SolverSpec& opt = m_case.solver;
   const std::vector<char>& fixed = m_problem->fixed();
@@ -485,34 +514,8 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       m_stats.factor_nonzeros = m_linear->factor_nonzeros();
       if (st != FactorStatus::Ok) return false;
       if (shift > 0.0 && debug_newton() && !spectra_printed) {
-        // Once per solve: which local terms bring the negative curvature.
-        spectra_printed = true;
-        fmt::print(stderr, "  indefinite tangent (shift {:.2e}); local Hessians:\n{}", shift,
-                   m_problem->local_spectra(m_q));
-        // The tangent's softest mode, by inverse iteration with the shifted factor.
-        VecX v = VecX::Ones(n), w(n), hv(n);
-        for (Index d = 0; d < n; ++d)
-          if (fixed[d]) v[d] = 0.0;
-        for (int it = 0; it < 30; ++it) {
-          v /= v.norm();
-          m_linear->solve(v, w);
-          for (Index d = 0; d < n; ++d)
-            if (fixed[d]) w[d] = 0.0;
-          v = w;
-        }
-        v /= v.norm();
-        std::vector<VecX> scratch;
-        symmetric_multiply(m_problem->pattern(), m_hessian, 0.0, v, hv, scratch);
-        fmt::print(stderr, "  softest mode: v.Hv = {:.3e} (mean diagonal {:.3e}); largest components:", v.dot(hv),
-                   mean_diag);
-        std::vector<Index> order(n);
-        std::iota(order.begin(), order.end(), Index{0});
-        std::partial_sort(order.begin(), order.begin() + 12, order.end(),
-                          [&](Index a, Index b) { return std::abs(v[a]) > std::abs(v[b]); });
-        for (int i = 0; i < 12; ++i)
-          fmt::print(stderr, " {:.3f}@{}.{}", v[order[i]], m_problem->pattern().group_of_dof(order[i]),
-                     order[i] - m_problem->pattern().group_dof(m_problem->pattern().group_of_dof(order[i])));
-        fmt::print(stderr, "\n");
+        spectra_printed = true;  // once per solve
+        print_indefinite_tangent(shift, mean_diag);
       }
       // Only the factor of a (nearly) unshifted tangent preconditions later iterations.
       m_reuse_factor = shift <= 1e-10 * mean_diag;

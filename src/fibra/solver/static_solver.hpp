@@ -109,6 +109,9 @@ class StaticSolver {
   struct Program;  // resolved loads and displacements per step
   bool solve_increment(int step, double lambda, std::vector<double>& history, int& iterations, double& residual);
   bool newton(std::vector<double>& history, int& iterations, double& residual);
+  /// Developers' trace of a shifted factorization (FIBRA_DEBUG_NEWTON): the indefinite local
+  /// Hessians and the tangent's softest mode, by inverse iteration with the current factor.
+  void print_indefinite_tangent(double shift, double mean_diag);
   /// Weaving: +1 / -1 when the contact normal from fiber fa towards fiber fb must be +z / -z
   /// (fibers of crossing tows, side from the weave matrix), 0 otherwise.
   int weave_side(int fa, int fb) const;
