@@ -777,9 +777,12 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     const double k0 = m_contact ? m_contact->initial_stiffness() : 0.0;
     const double relax_max = std::max(opt.weave_drag, opt.relax_drag) * k0, relax_min = 1e-9 * k0;
     m_relax_drag = relax ? opt.relax_drag * k0 : 0.0;
-    // Twice the last drag that failed, decaying by 0.7 per accepted increment: the drag does
-    // not fall straight back to a level that just failed (each failure costs a whole Newton
-    // solve; on the 480-fiber relax the drag went 35 (failed), 141 (failed), 563, then 141 again).
+    // Twice the last drag that failed, falling after each accepted increment as the drag itself
+    // does: the drag does not fall straight back to a level that just failed (each failure
+    // costs a whole Newton solve; on the 480-fiber relax the drag went 35 (failed), 141
+    // (failed), 563, then 141 again), but neither does an early failure at a high drag set the
+    // pace of the whole step (a floor decaying by 0.7 per increment took 26 easy increments to
+    // bring the 480-fiber relax's drag from 7e4 to 7 N/m, docs/performance.md, session 12).
     double failed_floor = 0.0;
     m_relax_settling = false;
     bool relaxed = !relax;
@@ -855,12 +858,9 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
           m_relax_settling = loaded && m_relax_residual <= opt.relax_tolerance;
         }
         // Easy increments: the drag falls, faster the easier they were.
-        if (iterations <= 12)
-          m_relax_drag = std::max(0.25 * m_relax_drag, relax_min);
-        else if (iterations <= 30)
-          m_relax_drag = std::max(0.5 * m_relax_drag, relax_min);
-        m_relax_drag = std::max(m_relax_drag, std::min(failed_floor, relax_max));
-        failed_floor *= 0.7;
+        const double fall = iterations <= 12 ? 0.25 : iterations <= 30 ? 0.5 : 1.0;
+        m_relax_drag = std::max(std::max(fall * m_relax_drag, relax_min), std::min(failed_floor, relax_max));
+        failed_floor *= fall;
       }
       lambda += step_dl;
       if (1.0 - lambda < 1e-12) lambda = 1.0;
