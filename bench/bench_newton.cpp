@@ -14,7 +14,6 @@
 //
 // Run with OMP_WAIT_POLICY=passive (spinning OpenMP workers starve OpenBLAS threads).
 #include <benchmark/benchmark.h>
-#include <dlfcn.h>
 #include <omp.h>
 
 #include <map>
@@ -22,6 +21,7 @@
 #include <string>
 
 #include "bench_common.hpp"
+#include "fibra/solver/blas_threads.hpp"
 #include "fibra/solver/linear_solver.hpp"
 
 namespace {
@@ -60,39 +60,14 @@ void add_size_counters(benchmark::State& state, const Bundle& b) {
   state.counters["nnz_A"] = static_cast<double>(b.problem->pattern().nonzeros());
 }
 
-// OpenBLAS thread count, looked up at run time (CHOLMOD reaches OpenBLAS through libblas.so.3,
-// which on Debian is the OpenBLAS pthread build; no link dependency needed here).
-using SetThreads = void (*)(int);
-using GetThreads = int (*)();
-using GetString = char* (*)();
-/// OpenBLAS build configuration and kernel set ("" without OpenBLAS).
-std::string openblas_info() {
-  auto config = reinterpret_cast<GetString>(dlsym(RTLD_DEFAULT, "openblas_get_config"));
-  auto core = reinterpret_cast<GetString>(dlsym(RTLD_DEFAULT, "openblas_get_corename"));
-  if (!config || !core) return "";
-  return std::string(config()) + " core=" + core();
-}
-SetThreads openblas_set() { return reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads")); }
-GetThreads openblas_get() { return reinterpret_cast<GetThreads>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads")); }
-
-/// Sets the OpenBLAS thread count for a scope (restores it after); false if OpenBLAS is absent.
+/// Sets the OpenBLAS thread count for a scope (restores it after); ok() false without OpenBLAS.
 class BlasThreads {
  public:
-  explicit BlasThreads(int n) : m_set(openblas_set()), m_get(openblas_get()) {
-    if (ok()) {
-      m_previous = m_get();
-      m_set(n);
-    }
-  }
-  ~BlasThreads() {
-    if (ok()) m_set(m_previous);
-  }
-  bool ok() const { return m_set && m_get; }
+  explicit BlasThreads(int n) : m_scope(n) {}
+  bool ok() const { return blas_threads_available(); }
 
  private:
-  SetThreads m_set;
-  GetThreads m_get;
-  int m_previous = 0;
+  ScopedBlasThreads m_scope;
 };
 
 /// Sets the OpenMP thread count for a scope (restores the previous one after).
@@ -218,7 +193,8 @@ void BM_CholmodFactorize(benchmark::State& state) {
   }
   add_size_counters(state, b);
   state.counters["nnz_L"] = s.factor_nonzeros();
-  state.SetLabel(openblas_info());
+  state.counters["flops"] = s.factor_flops();
+  state.SetLabel(blas_info());
 }
 BENCHMARK(BM_CholmodFactorize)
     ->ArgName("blas_threads")

@@ -4,10 +4,12 @@
 
 #include <stdexcept>
 
+#include "fibra/solver/blas_threads.hpp"
 #include "fibra/solver/linear_solver.hpp"
 
 namespace fibra {
 namespace {
+
 
 class CholmodSolver final : public LinearSolver {
  public:
@@ -44,6 +46,7 @@ class CholmodSolver final : public LinearSolver {
       cholmod_sparse pattern = wrap(m_dummy);
       m_factor = cholmod_analyze(&pattern, &m_common);
       if (!m_factor) throw std::runtime_error("CHOLMOD analysis failed");
+      m_flops = m_common.fl;
       m_pending = false;
     }
     m_factored = false;
@@ -56,6 +59,7 @@ class CholmodSolver final : public LinearSolver {
     // (The team size is fixed inside CHOLMOD, so the regions are made inactive instead.)
     const int levels = omp_get_max_active_levels();
     omp_set_max_active_levels(0);
+    const ScopedBlasThreads blas(blas_threads_for_factor());
     cholmod_factorize_p(&a, beta, nullptr, 0, m_factor, &m_common);
     omp_set_max_active_levels(levels);
     if (m_common.status == CHOLMOD_NOT_POSDEF) return FactorStatus::NotPositiveDefinite;
@@ -78,6 +82,7 @@ class CholmodSolver final : public LinearSolver {
     rhs.xtype = CHOLMOD_REAL;
     rhs.dtype = CHOLMOD_DOUBLE;
     // solve2 keeps its solution and work arrays between calls (repeated preconditioner solves).
+    const ScopedBlasThreads blas(blas_threads_for_factor());
     if (!cholmod_solve2(CHOLMOD_A, m_factor, &rhs, nullptr, &m_x, nullptr, &m_y, &m_e, &m_common))
       throw std::runtime_error("CHOLMOD solve failed");
     x = Eigen::Map<const VecX>(static_cast<double*>(m_x->x), b.size());
@@ -85,8 +90,21 @@ class CholmodSolver final : public LinearSolver {
 
   std::string name() const override { return "cholmod"; }
   double factor_nonzeros() const override { return m_common.lnz; }
+  double factor_flops() const override { return m_flops; }
 
  private:
+  /// BLAS threads for this factor's factorization and solves (0: leave them as they are).
+  /// With adaptive BLAS threads, factors of at least 5e10 flops (by default) run their BLAS on
+  /// as many threads as OpenMP has. Small factors stay on one BLAS thread: there OpenBLAS's idle
+  /// threads spin between the many small BLAS calls and take the cores from the OpenMP assembly
+  /// (a 2 x 2 weave ran twice as fast on one BLAS thread; the bundle benchmark's factor, 4.4e8
+  /// flops, factorizes in 828 ms on one and 900 ms on two). A 480-fiber woven sample's factor
+  /// (3.2e11 flops) factorizes 1.4 times faster on two, and its solves 1.25 times
+  /// (docs/performance.md, session 12).
+  int blas_threads_for_factor() const {
+    return m_flops >= adaptive_blas_min_flops() ? omp_get_max_threads() : 0;
+  }
+
   cholmod_sparse wrap(const std::vector<double>& values) {
     cholmod_sparse a{};
     a.nrow = a.ncol = m_pattern->rows();
@@ -106,6 +124,7 @@ class CholmodSolver final : public LinearSolver {
   cholmod_common m_common{};
   cholmod_factor* m_factor = nullptr;
   cholmod_dense *m_x = nullptr, *m_y = nullptr, *m_e = nullptr;  // solve2's solution and work arrays
+  double m_flops = 0.0;     // flops of a numeric factorization, from the last analysis
   bool m_pending = false;   // a new pattern waits for its analysis (next factorize)
   bool m_factored = false;  // m_factor holds a successful numeric factorization
   const BlockPattern* m_pattern = nullptr;

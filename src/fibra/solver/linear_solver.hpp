@@ -31,6 +31,8 @@ class LinearSolver {
   virtual std::string name() const = 0;
   /// Nonzeros in the factor after the last factorization (0 if unknown).
   virtual double factor_nonzeros() const { return 0; }
+  /// Floating-point operations of one numeric factorization, from the last analysis (0 if unknown).
+  virtual double factor_flops() const { return 0; }
 };
 
 /// Creates a solver by name ("cholmod" or "eigen"); throws std::invalid_argument otherwise.
