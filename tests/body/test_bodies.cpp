@@ -67,7 +67,9 @@ TEST_P(RotationExp, DerivativesMatchFiniteDifferences) {
   // Tangent: dR/dphi_j R^T = [T e_j]x.
   const Mat3 t = rotation_tangent(phi);
   for (int j = 0; j < 3; ++j) EXPECT_LT((dR[j] * r.transpose() - skew(t.col(j))).norm(), 1e-13);
-  if (angle < 3.0) EXPECT_LT((rotation_log(r) - Vec3(phi)).norm(), 1e-12);
+  if (angle < 3.0) {
+    EXPECT_LT((rotation_log(r) - Vec3(phi)).norm(), 1e-12);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Angles, RotationExp, ::testing::Values(1e-9, 1e-4, 0.1, 0.4999, 0.5001, 1.3, 2.5));

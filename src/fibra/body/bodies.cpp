@@ -219,22 +219,27 @@ Vec6 BodySystem::conditions(Index k, const VecX& q) const {
   return g;
 }
 
+template <class B, class F>
+void BodySystem::for_each_node_condition(B& b, const VecX& q, F&& f) const {
+  if (b.grip.empty() && !b.spin) return;
+  const Index pd = m_model.bodies[b.body].first_dof;
+  const Mat3 e = rotation_exp(-q.segment<3>(pd + 3).eval());
+  for (auto& m : b.members) {
+    if (m.body >= 0) continue;
+    const Vec3 off = b.grip.empty() ? Vec3::Zero().eval() : grip_offset(b, m, q, e, q.segment<3>(pd));
+    f(m, off, b.spin ? spin_offset(b, m, q, e) : 0.0);
+  }
+}
+
 double BodySystem::violation(const VecX& q) const {
   double v = 0.0;
   for (const Binding& b : m_bindings) {
     const Vec6 g = spatial_conditions(b, q);
     v = std::max({v, g.head<3>().norm(), g.tail<3>().norm()});
-    if (b.grip.empty() && !b.spin) continue;
-    const Index pd = m_model.bodies[b.body].first_dof;
-    const Mat3 e = rotation_exp(-q.segment<3>(pd + 3).eval());
-    for (const Member& m : b.members) {
-      if (m.body >= 0) continue;
-      if (!b.grip.empty()) {
-        const Vec3 off = grip_offset(b, m, q, e, q.segment<3>(pd));
-        for (int i : b.grip) v = std::max(v, std::abs(off[i]));
-      }
-      if (b.spin) v = std::max(v, std::abs(spin_offset(b, m, q, e)));
-    }
+    for_each_node_condition(b, q, [&](const Member&, const Vec3& off, double spin) {
+      for (int i : b.grip) v = std::max(v, std::abs(off[i]));
+      v = std::max(v, std::abs(spin));
+    });
   }
   return v;
 }
@@ -253,17 +258,10 @@ void BodySystem::update_multipliers(const VecX& q) {
     const Vec6 g = spatial_conditions(b, q);
     b.lambda.head<3>() += b.k * (dref.transpose() * g.head<3>());
     b.lambda.tail<3>() += b.k * (dref.transpose() * g.tail<3>());
-    if (b.grip.empty() && !b.spin) continue;
-    const Index pd = m_model.bodies[b.body].first_dof;
-    const Mat3 e = rotation_exp(-q.segment<3>(pd + 3).eval());
-    for (Member& m : b.members) {
-      if (m.body >= 0) continue;
-      if (!b.grip.empty()) {
-        const Vec3 off = grip_offset(b, m, q, e, q.segment<3>(pd));
-        for (int i : b.grip) m.grip_lambda[i] += b.kg * off[i];
-      }
-      if (b.spin) m.spin_lambda += b.kg * spin_offset(b, m, q, e);
-    }
+    for_each_node_condition(b, q, [&](Member& m, const Vec3& off, double spin) {
+      for (int i : b.grip) m.grip_lambda[i] += b.kg * off[i];
+      m.spin_lambda += b.kg * spin;
+    });
   }
 }
 

@@ -173,6 +173,11 @@ class BodySystem {
   double grip_energy(const Binding& b, const VecX& q, const Turn& t, VecX* g, Eigen::MatrixXd* h) const;
   /// Spin condition s_m of node member m of binding b, given e = exp(-[theta]x) [m].
   double spin_offset(const Binding& b, const Member& m, const VecX& q, const Mat3& e) const;
+  /// Calls f(member, grip offset, spin condition) for each fiber node of binding b (a Binding or
+  /// a const Binding) held by grips or a spin hold; the offset is zero without grips and the
+  /// spin condition zero without a spin hold. One walk for the violation and the multipliers.
+  template <class B, class F>
+  void for_each_node_condition(B& b, const VecX& q, F&& f) const;
   /// Adds the spin holds' energy of binding b (and their local gradient and Hessian when given).
   double spin_energy(const Binding& b, const VecX& q, const Turn& t, VecX* g, Eigen::MatrixXd* h) const;
 
