@@ -2,7 +2,8 @@
 // on the geometric cases the method must handle: crossings (also at the end of a fiber and
 // between radii 1:10), parallel and nearly parallel fibers, a tangent arc, a helix wound
 // around a straight fiber, self-contact of a coiled fiber and of a self-crossing path, none
-// between neighbouring elements; deterministic for any thread count.
+// between neighbouring elements; deterministic for any thread count. The normal update: only
+// the elements that carry force decide whether the normals settled.
 #include <gtest/gtest.h>
 
 #include <omp.h>
@@ -15,6 +16,7 @@
 #include <utility>
 
 #include "fibra/contact/broad_phase.hpp"
+#include "fibra/contact/contact_manager.hpp"
 #include "fibra/contact/detection.hpp"
 #include "fibra/model/model.hpp"
 
@@ -490,6 +492,71 @@ Model random_cloud(unsigned seed, double box) {
     c.fibers.push_back(h);
   }
   return build_model(c);
+}
+
+// Normal updates (ContactManager::update_normals): three parallel fibers, b pressed onto a
+// (centre distance 1.98 r: loaded), c beside a with a gap of 0.4 r (detected, no force).
+// Sliding c along the fibers turns the normals of a-c by ~0.2 rad: they follow at once, but
+// the turn reported (which decides whether the normals settled) stays that of a-b, zero.
+// Sliding b by 1e-4 r turns a-b by less than the tolerance: reported, normals kept (the
+// converged state stays consistent with them); by 0.5 r: reported and all a-b normals set.
+TEST(NormalUpdate, OnlyElementsCarryingForceDecideTheSettling) {
+  const double r = 1e-4, length = 40 * r;
+  Case c = base_case();
+  c.fibers.push_back(polyline("a", {Vec3(0, 0, 0), Vec3(length, 0, 0)}, r, 8));
+  c.fibers.push_back(polyline("b", {Vec3(0, 1.98 * r, 0), Vec3(length, 1.98 * r, 0)}, r, 8));
+  c.fibers.push_back(polyline("c", {Vec3(0, -2.4 * r, 0), Vec3(length, -2.4 * r, 0)}, r, 8));
+  const Model model = build_model(c);
+  ContactSpec spec;
+  spec.enabled = true;
+  ContactManager manager(model, spec);
+  VecX q = model.reference;
+  std::vector<ContactElement> contacts = manager.detect(q, q, {});
+  const auto pair_of = [&](const ContactElement& e) {
+    return std::make_pair(model.elements[e.a.element].fiber, model.elements[e.b.element].fiber);
+  };
+  int ab = 0, ac = 0;
+  for (const ContactElement& e : contacts) {
+    if (pair_of(e) == std::make_pair(0, 1)) {
+      ++ab;
+      EXPECT_LT(gap(model, q, e), -0.01 * r);
+    } else if (pair_of(e) == std::make_pair(0, 2)) {
+      ++ac;
+      EXPECT_GT(gap(model, q, e), 0.3 * r);
+    }
+  }
+  ASSERT_GT(ab, 10);
+  ASSERT_GT(ac, 10);
+  const auto slide = [&](int fiber, double dx) {
+    const Fiber& f = model.fibers[fiber];
+    for (Index k = f.first_node; k < f.first_node + f.num_nodes; ++k) q[9 * k] += dx;
+  };
+  const std::vector<ContactElement> before = contacts;
+  slide(2, 0.5 * r);
+  double idle = 0.0;
+  EXPECT_NEAR(manager.update_normals(contacts, q, &idle), 0.0, 1e-12);
+  EXPECT_NEAR(idle, std::atan2(0.5 * r, 2.4 * r), 0.02);
+  for (size_t k = 0; k < contacts.size(); ++k) {
+    const ContactElement& e = contacts[k];
+    const Vec3 d = (centre(model, q, e.b) - centre(model, q, e.a)).normalized();
+    if (pair_of(e) == std::make_pair(0, 2)) {
+      EXPECT_NEAR(e.normal.dot(d), 1.0, 1e-12);           // followed the centres
+      EXPECT_GT(gap(model, q, e), 0.0);                    // and still carries no force
+    } else {
+      EXPECT_EQ(e.normal, before[k].normal);
+    }
+  }
+  slide(1, 1e-4 * r);
+  const double small = manager.update_normals(contacts, q);
+  EXPECT_GT(small, 1e-5);
+  EXPECT_LT(small, spec.normal_tolerance);
+  for (size_t k = 0; k < contacts.size(); ++k)
+    if (pair_of(contacts[k]) == std::make_pair(0, 1)) EXPECT_EQ(contacts[k].normal, before[k].normal);
+  slide(1, 0.5 * r);
+  EXPECT_NEAR(manager.update_normals(contacts, q), std::atan2(0.5 * r, 1.98 * r), 0.02);
+  for (const ContactElement& e : contacts)
+    if (pair_of(e) == std::make_pair(0, 1))
+      EXPECT_NEAR(e.normal.dot((centre(model, q, e.b) - centre(model, q, e.a)).normalized()), 1.0, 1e-12);
 }
 
 TEST(BroadPhase, CandidatePairsEqualBruteForce) {

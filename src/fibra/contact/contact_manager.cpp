@@ -114,14 +114,19 @@ std::vector<ContactElement> ContactManager::detect(const VecX& q, const VecX& q_
   return std::move(det.elements);
 }
 
-double ContactManager::update_normals(std::vector<ContactElement>& contacts, const VecX& q) const {
-  // New normals between section centres; they replace the old ones only if one turned by the
-  // tolerance or more: below it the converged state stays consistent with the normals it was
-  // solved with (forces and reactions balance exactly).
-  double turn = 0.0;
+double ContactManager::update_normals(std::vector<ContactElement>& contacts, const VecX& q, double* idle_turn) const {
+  // New normals between section centres. An element with no force at q under its old normal
+  // nor under its new one (gap >= 0 with both: the penalty law and the friction cone, frozen at
+  // the normal force, are zero) takes its new normal at once; the others only if one of them
+  // turned by the tolerance or more: below it the converged state stays consistent with the
+  // normals it was solved with (forces and reactions balance exactly). Measuring the turn on
+  // every element let a pair of sliding fibers with no force between them (their section
+  // centres drifting apart along the fibers) keep a relax from settling.
+  double turn = 0.0, idle = 0.0;
   std::vector<Vec3> fresh(contacts.size());
+  std::vector<char> loaded(contacts.size(), 0);
   for (size_t k = 0; k < contacts.size(); ++k) {
-    const ContactElement& c = contacts[k];
+    ContactElement& c = contacts[k];
     if (c.prescribed) {
       fresh[k] = c.normal;
       continue;
@@ -129,10 +134,21 @@ double ContactManager::update_normals(std::vector<ContactElement>& contacts, con
     const Vec3 d = section_centre(m_model, c.b, q) - section_centre(m_model, c.a, q);
     const double len = d.norm();
     fresh[k] = len > 0.0 ? Vec3(d / len) : c.normal;
-    turn = std::max(turn, std::acos(std::clamp(fresh[k].dot(c.normal), -1.0, 1.0)));
+    const double angle = std::acos(std::clamp(fresh[k].dot(c.normal), -1.0, 1.0));
+    const Vec3 gap_vector = particle_position(c.b, q.data() + m_model.elements[c.b.element].first_dof) -
+                            particle_position(c.a, q.data() + m_model.elements[c.a.element].first_dof);
+    if (gap_vector.dot(c.normal) + c.offset < 0.0 || gap_vector.dot(fresh[k]) + c.offset < 0.0) {
+      loaded[k] = 1;
+      turn = std::max(turn, angle);
+    } else {
+      idle = std::max(idle, angle);
+      c.normal = fresh[k];
+    }
   }
   if (turn >= m_spec.normal_tolerance)
-    for (size_t k = 0; k < contacts.size(); ++k) contacts[k].normal = fresh[k];
+    for (size_t k = 0; k < contacts.size(); ++k)
+      if (loaded[k]) contacts[k].normal = fresh[k];
+  if (idle_turn) *idle_turn = idle;
   return turn;
 }
 

@@ -40,9 +40,13 @@ class ContactManager {
   /// the matching previous element (or the initial one), friction history carried over from
   /// `previous` (matched by fiber pair and arc length), separations measured at `q_start`.
   std::vector<ContactElement> detect(const VecX& q, const VecX& q_start, const std::vector<ContactElement>& previous);
-  /// Computes each normal as the unit vector between its section centres at q and, if any
-  /// turned by the normal tolerance or more, sets them all; returns the largest turn [rad].
-  double update_normals(std::vector<ContactElement>& contacts, const VecX& q) const;
+  /// Computes each normal as the unit vector between its section centres at q. Elements that
+  /// carry no force at q with either normal (gap >= 0 with both) take theirs at once: their
+  /// energy is zero before and after, the equilibrium does not see it. The others take theirs
+  /// only if one of them turned by the normal tolerance or more, and then all at once. Returns
+  /// the largest turn among the elements that carry force [rad] (what decides whether the
+  /// normals settled); `idle_turn`, if given, gets the largest turn among the others.
+  double update_normals(std::vector<ContactElement>& contacts, const VecX& q, double* idle_turn = nullptr) const;
   /// Weaving (METHOD §6): every element whose fibers `rule(fiber_a, fiber_b)` maps to +1 or -1
   /// gets the normal rule * `direction` (from A towards B), its border particles re-chosen to
   /// face that way, and is marked prescribed (update_normals leaves it); `offset` is added to
