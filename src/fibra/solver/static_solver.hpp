@@ -118,6 +118,9 @@ class StaticSolver {
   /// Newton, then augmented-Lagrangian updates of the binding multipliers until the binding
   /// conditions hold (each update followed by Newton again).
   bool equilibrium(std::vector<double>& history, int& iterations, double& residual);
+  /// Relative residual (scaled like Newton's, over the reference force) at the current state with
+  /// the contact normals and frozen cones just updated: how far the update moved the forces.
+  double normal_update_residual();
   void apply(int step, double lambda);
   std::vector<double> reactions(const VecX& gradient) const;
 
@@ -133,6 +136,7 @@ class StaticSolver {
   VecX m_q;
   VecX m_q_start;  // state at the start of the current increment
   VecX m_gradient;
+  VecX m_update_gradient;  // gradient at the converged state with updated normals (normal_update_residual)
   std::vector<double> m_hessian;
   VecX m_force_scale;   // residual weights: 1 on x0, 1/radius on g
   VecX m_length_scale;  // increment weights: 1 on x0, radius on g
