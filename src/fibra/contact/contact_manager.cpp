@@ -122,7 +122,8 @@ double ContactManager::update_normals(std::vector<ContactElement>& contacts, con
   // normals it was solved with (forces and reactions balance exactly). Measuring the turn on
   // every element let a pair of sliding fibers with no force between them (their section
   // centres drifting apart along the fibers) keep a relax from settling.
-  double turn = 0.0, idle = 0.0;
+  double turn = 0.0, idle = 0.0, worst_slide = 0.0;
+  size_t worst = contacts.size();
   std::vector<Vec3> fresh(contacts.size());
   std::vector<char> loaded(contacts.size(), 0);
   for (size_t k = 0; k < contacts.size(); ++k) {
@@ -139,6 +140,10 @@ double ContactManager::update_normals(std::vector<ContactElement>& contacts, con
                             particle_position(c.a, q.data() + m_model.elements[c.a.element].first_dof);
     if (gap_vector.dot(c.normal) + c.offset < 0.0 || gap_vector.dot(fresh[k]) + c.offset < 0.0) {
       loaded[k] = 1;
+      if (angle > turn) {
+        worst = k;
+        worst_slide = (gap_vector - gap_vector.dot(c.normal) * c.normal).norm();
+      }
       turn = std::max(turn, angle);
     } else {
       idle = std::max(idle, angle);
@@ -149,6 +154,9 @@ double ContactManager::update_normals(std::vector<ContactElement>& contacts, con
     for (size_t k = 0; k < contacts.size(); ++k)
       if (loaded[k]) contacts[k].normal = fresh[k];
   if (idle_turn) *idle_turn = idle;
+  if (debug_newton() && worst < contacts.size())
+    fmt::print(stderr, " largest turn with force: element {} (zone {}), its particles slid {:.3e} m apart along the old normal's plane\n",
+               worst, contacts[worst].zone, worst_slide);
   return turn;
 }
 
