@@ -7,6 +7,8 @@
 #include <Eigen/Geometry>
 #include <random>
 
+#include <fmt/format.h>
+
 #include "fibra/contact/contact_element.hpp"
 #include "support/finite_difference.hpp"
 
@@ -181,6 +183,33 @@ TEST(ContactElement, FrozenConeGivesAnExactSymmetricTangent) {
       contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, &h, nullptr, true);
       EXPECT_LT((h - h.transpose()).norm(), 1e-12 * h.norm()) << what << ": the exact tangent is symmetric";
       // The gradient is that of the energy (a potential of the slip), away from the cone's edge.
+      Eigen::VectorXd q(kContactDofs);
+      q << s.qa, s.qb;
+      auto energy_of = [&](const Eigen::VectorXd& x) {
+        return contact_element_energy(s.c, x.data(), x.data() + kElementDofs, fp, nullptr, nullptr, nullptr);
+      };
+      ContactVec g;
+      contact_element_energy(s.c, q.data(), q.data() + kElementDofs, fp, &g, nullptr, nullptr);
+      EXPECT_LT(test::rel_error(g, test::fd_gradient(energy_of, q, test::fd_step(1e-6)), 1e-300), 2e-5) << what;
+    }
+  }
+  // With a friction force carried over from the last increment (the solver's usual case), in
+  // stick and on the cone, the energy is the potential of the returned force: f . du is not
+  // (its gradient adds (df/du)^T du, which vanishes only when f_prev = 0).
+  for (double carried : {0.4, 0.9, 1.6}) {  // |f_prev| / (mu f_n): inside, near, beyond the cone
+    for (double slide : {1e-8, 0.3e-6, 3e-6}) {
+      Pair s = make_pair(rng, -3e-6, slide * Vec3(u(rng), u(rng), u(rng)).normalized());
+      ContactResponse now;
+      contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, nullptr, &now);
+      s.c.friction_normal = now.normal_force;
+      const Vec3 n = s.c.normal;
+      Vec3 dir = Vec3(u(rng), u(rng), u(rng));
+      dir = (dir - dir.dot(n) * n).normalized();
+      s.c.friction_previous = carried * fp.mu * now.normal_force * dir;
+      ContactResponse r;
+      contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, nullptr, &r);
+      const std::string what = fmt::format("carried {} slide {:.0e} ({})", carried, slide, r.slip ? "slip" : "stick");
+      check_derivatives(s, fp, true, 1e-5, what.c_str());
       Eigen::VectorXd q(kContactDofs);
       q << s.qa, s.qb;
       auto energy_of = [&](const Eigen::VectorXd& x) {

@@ -39,8 +39,15 @@ double contact_element_energy(const ContactElement& c, const double* q_a, const 
   if (friction.mu > 0.0 && fn_cone > 0.0) {
     kt = friction.mu * fn_cone / friction.elastic_slip;
     fr = friction_return_map(c.friction_previous, d - c.separation_previous, nrm, fn_cone, friction.mu, kt);
+    // Potential of the return mapping (frozen cone, limit L = mu f_n): with the trial force
+    // f_tr = P f_prev + kt du, (|f_tr|^2 - |P f_prev|^2) / (2 kt) in stick and
+    // (L^2 - |P f_prev|^2 + 2 L (|f_tr| - L)) / (2 kt) on the cone: C1 across the cone's edge, and its
+    // gradient is the returned force (f_prev included, unlike f . du).
     const Vec3 fprev = proj * c.friction_previous;
-    energy += fr.slip ? fr.force.dot(du) : fprev.dot(du) + 0.5 * kt * du.squaredNorm();
+    const double limit = friction.mu * fn_cone;
+    const double fp = fprev.norm();
+    energy += fr.slip ? ((limit - fp) * (limit + fp) + 2.0 * limit * (fr.trial_norm - limit)) / (2.0 * kt)
+                      : fprev.dot(du) + 0.5 * kt * du.squaredNorm();
   }
   if (response) {
     response->gap = gap;
