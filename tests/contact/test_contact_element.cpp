@@ -109,6 +109,18 @@ void check_derivatives(const Pair& s, const FrictionParams& fp, bool consistent,
   }
 }
 
+// The gradient is the finite-difference derivative of the energy.
+void expect_gradient_of_energy(const Pair& s, const FrictionParams& fp, const char* what) {
+  Eigen::VectorXd q(kContactDofs);
+  q << s.qa, s.qb;
+  auto energy_of = [&](const Eigen::VectorXd& x) {
+    return contact_element_energy(s.c, x.data(), x.data() + kElementDofs, fp, nullptr, nullptr, nullptr);
+  };
+  ContactVec g;
+  contact_element_energy(s.c, q.data(), q.data() + kElementDofs, fp, &g, nullptr, nullptr);
+  EXPECT_LT(test::rel_error(g, test::fd_gradient(energy_of, q, test::fd_step(1e-6)), 1e-300), 2e-5) << what;
+}
+
 TEST(ContactElement, NormalDerivativesAcrossTheKinksOfTheLaw) {
   std::mt19937 rng(7);
   const FrictionParams none{0.0, 1e-6};
@@ -183,14 +195,7 @@ TEST(ContactElement, FrozenConeGivesAnExactSymmetricTangent) {
       contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, &h, nullptr, true);
       EXPECT_LT((h - h.transpose()).norm(), 1e-12 * h.norm()) << what << ": the exact tangent is symmetric";
       // The gradient is that of the energy (a potential of the slip), away from the cone's edge.
-      Eigen::VectorXd q(kContactDofs);
-      q << s.qa, s.qb;
-      auto energy_of = [&](const Eigen::VectorXd& x) {
-        return contact_element_energy(s.c, x.data(), x.data() + kElementDofs, fp, nullptr, nullptr, nullptr);
-      };
-      ContactVec g;
-      contact_element_energy(s.c, q.data(), q.data() + kElementDofs, fp, &g, nullptr, nullptr);
-      EXPECT_LT(test::rel_error(g, test::fd_gradient(energy_of, q, test::fd_step(1e-6)), 1e-300), 2e-5) << what;
+      expect_gradient_of_energy(s, fp, what);
     }
   }
   // With a friction force carried over from the last increment (the solver's usual case), in
@@ -210,14 +215,7 @@ TEST(ContactElement, FrozenConeGivesAnExactSymmetricTangent) {
       contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, nullptr, &r);
       const std::string what = fmt::format("carried {} slide {:.0e} ({})", carried, slide, r.slip ? "slip" : "stick");
       check_derivatives(s, fp, true, 1e-5, what.c_str());
-      Eigen::VectorXd q(kContactDofs);
-      q << s.qa, s.qb;
-      auto energy_of = [&](const Eigen::VectorXd& x) {
-        return contact_element_energy(s.c, x.data(), x.data() + kElementDofs, fp, nullptr, nullptr, nullptr);
-      };
-      ContactVec g;
-      contact_element_energy(s.c, q.data(), q.data() + kElementDofs, fp, &g, nullptr, nullptr);
-      EXPECT_LT(test::rel_error(g, test::fd_gradient(energy_of, q, test::fd_step(1e-6)), 1e-300), 2e-5) << what;
+      expect_gradient_of_energy(s, fp, what.c_str());
     }
   }
   // A cone frozen at zero force: no friction, even on a penetrating element.
