@@ -187,6 +187,7 @@ inline void expect_same_case(const Case& a, const Case& b, bool compare_fabric =
   EXPECT_EQ(s.max_iterations, t.max_iterations);
   EXPECT_EQ(s.max_cuts, t.max_cuts);
   EXPECT_EQ(s.line_search, t.line_search);
+  EXPECT_EQ(s.test_predictor, t.test_predictor);
   EXPECT_EQ(s.linear_solver, t.linear_solver);
   EXPECT_EQ(s.ordering, t.ordering);
   expect_same_double(s.max_step, t.max_step, "solver.max_step");

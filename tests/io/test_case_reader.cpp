@@ -109,6 +109,7 @@ displacement_tolerance = 1e-9
 max_iterations = 30
 max_cuts = 5
 line_search = false
+test_predictor = false
 linear_solver = "eigen"
 
 [output]
@@ -291,6 +292,7 @@ TEST(CaseReader, ParsesEveryPartOfTheSchema) {
   EXPECT_EQ(c.solver.max_iterations, 30);
   EXPECT_EQ(c.solver.max_cuts, 5);
   EXPECT_FALSE(c.solver.line_search);
+  EXPECT_FALSE(c.solver.test_predictor);
   EXPECT_EQ(c.solver.linear_solver, "eigen");
   EXPECT_EQ(c.output.every, 2);
   EXPECT_EQ(c.output.tube_sides, 16);

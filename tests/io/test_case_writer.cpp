@@ -137,6 +137,7 @@ displacement_tolerance = 1e-9
 max_iterations = 30
 max_cuts = 5
 line_search = false
+test_predictor = false
 linear_solver = "eigen"
 ordering = "amd"
 max_step = 1e-4

@@ -1633,7 +1633,7 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   expect_table(t, path);
   check_keys(t, path,
              {"residual_tolerance", "displacement_tolerance", "max_iterations", "max_cuts",
-              "line_search", "linear_solver", "ordering", "binding_tolerance", "max_binding_updates",
+              "line_search", "test_predictor", "linear_solver", "ordering", "binding_tolerance", "max_binding_updates",
               "binding_stiffness", "max_step", "weave_drag", "relax_drag", "drag_axial", "relax_tolerance", "test_tolerance", "pseudo_tolerance",
               "krylov_iterations", "krylov_tolerance"});
   SolverSpec s;
@@ -1648,6 +1648,7 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   }
   if (const Value* v = find(t, "max_cuts")) s.max_cuts = to_int(*v, join(path, "max_cuts"), 0);
   if (const Value* v = find(t, "line_search")) s.line_search = to_bool(*v, join(path, "line_search"));
+  if (const Value* v = find(t, "test_predictor")) s.test_predictor = to_bool(*v, join(path, "test_predictor"));
   if (const Value* v = find(t, "linear_solver")) {
     const std::string key = join(path, "linear_solver");
     s.linear_solver = to_string(*v, key);

@@ -277,6 +277,7 @@ void write_solver(std::string& out, const SolverSpec& s) {
   out += fmt::format("max_iterations = {}\n", s.max_iterations);
   out += fmt::format("max_cuts = {}\n", s.max_cuts);
   out += fmt::format("line_search = {}\n", s.line_search ? "true" : "false");
+  out += fmt::format("test_predictor = {}\n", s.test_predictor ? "true" : "false");
   out += fmt::format("linear_solver = {}\n", quoted(s.linear_solver));
   out += fmt::format("ordering = {}\n", quoted(s.ordering));
   if (s.max_step >= 0) out += fmt::format("max_step = {}\n", number(s.max_step));  // < 0: automatic

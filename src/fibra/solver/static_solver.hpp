@@ -106,6 +106,10 @@ class StaticSolver {
   /// Biaxial and shear steps: the edge bodies' conditions from their positions at the step's
   /// start (prescribed start and end values of the body dofs, into `disp`).
   void test_conditions(int step, std::map<Index, std::pair<double, double>>& disp) const;
+  /// Tests: moves the free nodes and bodies as the edge bodies move from the current state to
+  /// load factor lambda (interpolated between opposite edges), the section vectors turned with
+  /// their fiber's tangent. A starting point for the level's Newton solve, not a result.
+  void predict_test_level(int step, double lambda);
   struct Program;  // resolved loads and displacements per step
   bool solve_increment(int step, double lambda, std::vector<double>& history, int& iterations, double& residual);
   bool newton(std::vector<double>& history, int& iterations, double& residual);
@@ -134,7 +138,8 @@ class StaticSolver {
   ContactStats m_contact_stats;
   std::vector<ContactResponse> m_contact_responses;  // at the accepted state of the increment
   VecX m_q;
-  VecX m_q_start;  // state at the start of the current increment
+  VecX m_q_start;  // state at the start of the current increment (friction slips, crossings)
+  VecX m_drag_anchor;  // where the drag pulls: the increment's start, or a test level's predicted state
   VecX m_gradient;
   VecX m_update_gradient;  // gradient at the converged state with updated normals (normal_update_residual)
   std::vector<double> m_hessian;
