@@ -479,9 +479,9 @@ TEST(FabricTests, BiaxialCurveIsJShaped) {
 // and a shear of 4 degrees, each in two levels, with and without it: the levels' first
 // increments take fewer Newton iterations, and the settled edge forces differ by the
 // path-dependence of friction only. Measured: biaxial 15 iterations against 16, x+ forces
-// 9.610 / 9.565 and 16.35 / 16.25 N; shear 12 against 36 (43 when the lateral edges, free to
-// turn, took the field's translation only and not its turn; 19 with the turn linearized),
-// top-edge forces 0.1443 / 0.1436 and 0.5655 / 0.5649 N.
+// 9.610 / 9.565 and 16.35 / 16.25 N; shear 12 against 35 (36 with two BLAS threads; 43 when
+// the lateral edges, free to turn, took the field's translation only and not its turn; 19 with
+// the turn linearized), top-edge forces 0.1442 / 0.1436 and 0.5654 / 0.5648 N (ctest's single-threaded BLAS).
 TEST(FabricTests, LevelPredictorSavesIterationsNotTheCurve) {
   struct Run {
     int first_iterations = 0;    // over the levels' first increments

@@ -740,12 +740,14 @@ void StaticSolver::predict_test_level(int step, double lambda) {
   // edges moved alone; what is left is the grips' (a simple shear stretches a gripped tow
   // end's width by gamma^2 / 2). Moving the centres alone, without the turn, left the 480-fiber
   // shear a residual of 2.7e5 N on an edge's turn. A body that cannot turn keeps the members'
-  // mean translation. Bodies bound
-  // to bodies (edges to tow ends) come after their members: three passes cover the fabric's
-  // hierarchy (fiber ends, tow ends, edges).
+  // mean translation. A body bound to bodies (an edge to its tow ends) must see its members
+  // already moved: the passes repeat until one changes nothing (each body's update depends
+  // only on its members, so one pass per level of the hierarchy, whatever the bodies' order).
   if (m_bodies) {
-    for (int pass = 0; pass < 3; ++pass) {
-      for (Index b = 0; b < static_cast<Index>(m_model.bodies.size()); ++b) {
+    const Index num_bodies = static_cast<Index>(m_model.bodies.size());
+    for (Index pass = 0; pass <= num_bodies; ++pass) {
+      bool changed = false;
+      for (Index b = 0; b < num_bodies; ++b) {
         const Index d0 = m_model.bodies[b].first_dof;
         bool moves = false;
         for (int k = 0; k < 6; ++k) moves = moves || !fixed[d0 + k];
@@ -787,10 +789,12 @@ void StaticSolver::predict_test_level(int step, double lambda) {
         const Vec3 centre_before = before.segment<3>(d0);
         const Vec3 moved_centre = moved_mean - rotation_exp(w) * (mean - centre_before);
         for (int k = 0; k < 3; ++k) {
-          if (!fixed[d0 + k]) m_q[d0 + k] = moved_centre[k];
-          if (!fixed[d0 + 3 + k]) m_q[d0 + 3 + k] = before[d0 + 3 + k] + w[k];
+          if (!fixed[d0 + k] && m_q[d0 + k] != moved_centre[k]) m_q[d0 + k] = moved_centre[k], changed = true;
+          const double turned = before[d0 + 3 + k] + w[k];
+          if (!fixed[d0 + 3 + k] && m_q[d0 + 3 + k] != turned) m_q[d0 + 3 + k] = turned, changed = true;
         }
       }
+      if (!changed) break;
     }
   }
   if (debug_newton() && m_bodies) {
