@@ -1,5 +1,6 @@
 #include "fibra/solver/solver_state.hpp"
 
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <type_traits>
@@ -16,7 +17,7 @@ namespace {
 // Layout (little-endian, as the machine writes it): the magic line, a version, then the fields
 // in the order below, then the end mark (a truncated file misses it).
 constexpr char kMagic[] = "fibra state\n";
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;  // 2: test_drag
 constexpr char kEnd[] = "end of state\n";
 
 // Appends the fields' bytes to a buffer (the file is then written at once, atomically).
@@ -160,6 +161,7 @@ void write_state_file(const std::string& path, const SolverState& s) {
       o.put(d.first);
       o.put(d.second);
     }
+    o.put(s.test_drag);
     o.bytes(kEnd, sizeof(kEnd) - 1);
   }
   write_file_atomic(path, buffer);
@@ -173,8 +175,9 @@ SolverState read_state_file(const std::string& path) {
   if (!file.read(magic, sizeof(magic)) || std::memcmp(magic, kMagic, sizeof(magic)) != 0)
     in.bad("not a fibra state file (state.bin of a result directory expected)");
   const auto version = in.get<std::uint32_t>();
-  if (version != kVersion)
-    in.bad(fmt::format("state file version {}, this fibra reads version {}: run the case again", version, kVersion));
+  if (version != kVersion && version != 1)
+    in.bad(fmt::format("state file version {}, this fibra reads versions 1 to {}: run the case again", version,
+                       kVersion));
   SolverState s;
   s.model.dofs = in.get<std::int64_t>();
   s.model.elements = in.get<std::int64_t>();
@@ -216,6 +219,10 @@ SolverState read_state_file(const std::string& path) {
     const auto dof = in.get<std::int64_t>();
     const double a = in.get<double>(), b = in.get<double>();
     s.disp[dof] = {a, b};
+  }
+  if (version >= 2) {
+    s.test_drag = in.get<double>();
+    if (!std::isfinite(s.test_drag) || s.test_drag < 0.0) in.bad("a negative or undefined test drag: the file is corrupt");
   }
   char end[sizeof(kEnd) - 1];
   in.read(end, sizeof(end));

@@ -38,6 +38,10 @@ struct SolverState {
   VecX force_end;                                     ///< loads in force, per dof
   std::map<Index, std::pair<Vec3, Vec3>> moments;     ///< nodal moments in force (start, end)
   std::map<Index, std::pair<double, double>> disp;    ///< prescribed dofs (start, end) of q - reference
+  /// The drag stiffness [N/m] that applied the last load level of a test step (biaxial, shear)
+  /// in the run that wrote the state (0 before any): a run going on from the state loads its
+  /// first test level with at least that drag. Not in version-1 files (read as 0).
+  double test_drag = 0.0;
 };
 
 /// Writes `state` to `path` (write_file_atomic: through a temporary file renamed into place;

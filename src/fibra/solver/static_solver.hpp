@@ -152,6 +152,7 @@ class StaticSolver {
   std::vector<std::pair<int, int>> m_fiber_tow;  // per fiber: (0 warp / 1 weft / -1 none, tow index)
   double m_weave_depth = -1;     // penetration between crossing tows at the weave step's start [m]
   double m_relax_drag = 0;       // relax steps: drag stiffness per node of the next increment [N/m]
+  double m_test_drag = 0;        // drag that applied the last test level, of this run or its start's [N/m]
   bool m_normals_settled = true;  // the last increment's normals and friction cones were a fixed point
   bool m_reuse_factor = false;    // the last factorization may precondition the next Newton solve
   VecX m_rhs;                     // right-hand side of the Newton solve
