@@ -175,7 +175,7 @@ SolverState read_state_file(const std::string& path) {
   if (!file.read(magic, sizeof(magic)) || std::memcmp(magic, kMagic, sizeof(magic)) != 0)
     in.bad("not a fibra state file (state.bin of a result directory expected)");
   const auto version = in.get<std::uint32_t>();
-  if (version != kVersion && version != 1)
+  if (version < 1 || version > kVersion)
     in.bad(fmt::format("state file version {}, this fibra reads versions 1 to {}: run the case again", version,
                        kVersion));
   SolverState s;

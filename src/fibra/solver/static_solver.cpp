@@ -960,14 +960,13 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     // 12's 480 relax, with the fast floor): there the floor decays by 0.7 per increment
     // (docs/performance.md, session 12).
     double failed_floor = 0.0;
-    // Tests: the drag that applied the last load level (its first accepted increment). A level's
-    // first increment moves the edges; at the low drag the previous level settled with it failed
-    // twice on the 480-fiber biaxial test (at 288 and 1 152 N/m, about 10 minutes each) before it
-    // converged at 4 608 N/m, so the next level starts at the drag that applied this one.
-    // It goes on from the last test step of the run, or of the run whose state this one
-    // starts from (a restart from a test's checkpoint whose first level started from relax_drag
-    // failed twice on the 480-fiber biaxial test before it reached that drag again).
-    double loading_drag = m_test_drag;
+    // Tests: m_test_drag is the drag that applied the last load level (its first accepted
+    // increment). A level's first increment moves the edges; at the low drag the previous level
+    // settled with it failed twice on the 480-fiber biaxial test (at 288 and 1 152 N/m, about 10
+    // minutes each) before it converged at 4 608 N/m, so the next level starts at the drag that
+    // applied this one. It goes on from the last test step of the run, or of the run whose state
+    // this one starts from (a restart from a test's checkpoint whose first level started from
+    // relax_drag failed twice on the 480-fiber biaxial test before it reached that drag again).
     // Tests: failed attempts at the current level's loading increment (the one that moves the
     // edges; a failure while the level settles raises the drag and says nothing of the level's
     // size). A level loaded at the first attempt lets the next level grow by half, back towards
@@ -986,7 +985,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       dl = std::min(dl, 1.0 - lambda);
       const double step_dl = level_settled ? dl : 0.0;
       if (test && level_settled && step_dl > 0.0)
-        m_relax_drag = std::max(m_relax_drag, std::min(loading_drag, relax_max));
+        m_relax_drag = std::max(m_relax_drag, std::min(m_test_drag, relax_max));
       const VecX saved = m_q;
       m_q_start = m_q;
       // A test level's first increment starts from the interior moved as the edges move (the
@@ -1048,7 +1047,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         continue;
       }
       const double used_drag = m_problem->drag();
-      if (test && step_dl > 0.0) m_test_drag = loading_drag = used_drag;
+      if (test && step_dl > 0.0) m_test_drag = used_drag;
       if (relax) {
         // Drag force left at the end of the increment (scaled like the residual), relative to
         // the reference force.
@@ -1123,7 +1122,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       observer(info, m_q);
       t_increment = std::chrono::steady_clock::now();
       // Grow back towards the requested increment size: after an easy increment, or in tests
-      // after a level that settled without a failed attempt.
+      // once a level has settled whose loading increment converged at the first attempt.
       if (test) {
         if (level_settled) {
           if (level_failures == 0) dl = std::min(nominal, dl * 1.5);
