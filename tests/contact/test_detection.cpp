@@ -494,12 +494,15 @@ Model random_cloud(unsigned seed, double box) {
   return build_model(c);
 }
 
-// Normal updates (ContactManager::update_normals): three parallel fibers, b pressed onto a
-// (centre distance 1.98 r: loaded), c beside a with a gap of 0.4 r (detected, no force).
-// Sliding c along the fibers turns the normals of a-c by ~0.2 rad: they follow at once, but
+// Normal updates (ContactManager::update_normals): three parallel fibers along x, b pressed
+// onto a (centre distance 1.98 r: loaded), c beside a with a gap of 0.4 r (detected, no force).
+// A normal is the vector between the section centres in the plane normal to the fibers'
+// (bisected) tangents, so fibers sliding along each other keep their normals: sliding b or c
+// along x by 0.5 r turns nothing (the vector between the centres tilts by 0.25 rad). Moving c
+// sideways (z) by 0.5 r turns the normals of a-c by atan(0.5 / 2.4): they follow at once, but
 // the turn reported (which decides whether the normals settled) stays that of a-b, zero.
-// Sliding b by 1e-4 r turns a-b by less than the tolerance: reported, normals kept (the
-// converged state stays consistent with them); by 0.5 r: reported and all a-b normals set.
+// Moving b sideways by 1e-4 r turns a-b by less than the tolerance: reported, normals kept
+// (the converged state stays consistent with them); by 0.5 r: reported and all a-b normals set.
 TEST(NormalUpdate, OnlyElementsCarryingForceDecideTheSettling) {
   const double r = 1e-4, length = 40 * r;
   Case c = base_case();
@@ -527,36 +530,106 @@ TEST(NormalUpdate, OnlyElementsCarryingForceDecideTheSettling) {
   }
   ASSERT_GT(ab, 10);
   ASSERT_GT(ac, 10);
-  const auto slide = [&](int fiber, double dx) {
+  const auto move = [&](int fiber, const Vec3& by) {
     const Fiber& f = model.fibers[fiber];
-    for (Index k = f.first_node; k < f.first_node + f.num_nodes; ++k) q[9 * k] += dx;
+    for (Index k = f.first_node; k < f.first_node + f.num_nodes; ++k) q.segment<3>(9 * k) += by;
+  };
+  // The normal expected at q: the centres' vector without its x part (the fibers' axis).
+  const auto in_plane = [&](const ContactElement& e) {
+    Vec3 d = centre(model, q, e.b) - centre(model, q, e.a);
+    d.x() = 0.0;
+    return Vec3(d.normalized());
   };
   const std::vector<ContactElement> before = contacts;
-  slide(2, 0.5 * r);
-  double idle = 0.0;
+  move(1, Vec3(0.5 * r, 0, 0));
+  move(2, Vec3(-0.5 * r, 0, 0));
+  double idle = 1.0;
+  EXPECT_NEAR(manager.update_normals(contacts, q, &idle), 0.0, 1e-12);
+  EXPECT_NEAR(idle, 0.0, 1e-12);
+  for (size_t k = 0; k < contacts.size(); ++k) {
+    EXPECT_NEAR(contacts[k].normal.dot(before[k].normal), 1.0, 1e-12);
+    // The vector between the centres did tilt: by atan(0.5 / 1.98) for a-b.
+    if (pair_of(contacts[k]) == std::make_pair(0, 1)) {
+      EXPECT_NEAR((centre(model, q, contacts[k].b) - centre(model, q, contacts[k].a)).normalized().dot(before[k].normal),
+                  std::cos(std::atan2(0.5, 1.98)), 1e-3);
+    }
+  }
+  move(2, Vec3(0, 0, 0.5 * r));
   EXPECT_NEAR(manager.update_normals(contacts, q, &idle), 0.0, 1e-12);
   EXPECT_NEAR(idle, std::atan2(0.5 * r, 2.4 * r), 0.02);
   for (size_t k = 0; k < contacts.size(); ++k) {
     const ContactElement& e = contacts[k];
-    const Vec3 d = (centre(model, q, e.b) - centre(model, q, e.a)).normalized();
     if (pair_of(e) == std::make_pair(0, 2)) {
-      EXPECT_NEAR(e.normal.dot(d), 1.0, 1e-12);           // followed the centres
-      EXPECT_GT(gap(model, q, e), 0.0);                    // and still carries no force
+      EXPECT_NEAR(e.normal.dot(in_plane(e)), 1.0, 1e-12);  // followed the centres
+      EXPECT_GT(gap(model, q, e), 0.0);                     // and still carries no force
     } else {
       EXPECT_EQ(e.normal, before[k].normal);
     }
   }
-  slide(1, 1e-4 * r);
+  move(1, Vec3(0, 0, 1e-4 * r));
   const double small = manager.update_normals(contacts, q);
   EXPECT_GT(small, 1e-5);
   EXPECT_LT(small, spec.normal_tolerance);
-  for (size_t k = 0; k < contacts.size(); ++k)
-    if (pair_of(contacts[k]) == std::make_pair(0, 1)) EXPECT_EQ(contacts[k].normal, before[k].normal);
-  slide(1, 0.5 * r);
+  for (size_t k = 0; k < contacts.size(); ++k) {
+    if (pair_of(contacts[k]) == std::make_pair(0, 1)) {
+      EXPECT_EQ(contacts[k].normal, before[k].normal);
+    }
+  }
+  move(1, Vec3(0, 0, 0.5 * r));
   EXPECT_NEAR(manager.update_normals(contacts, q), std::atan2(0.5 * r, 1.98 * r), 0.02);
-  for (const ContactElement& e : contacts)
-    if (pair_of(e) == std::make_pair(0, 1))
-      EXPECT_NEAR(e.normal.dot((centre(model, q, e.b) - centre(model, q, e.a)).normalized()), 1.0, 1e-12);
+  for (const ContactElement& e : contacts) {
+    if (pair_of(e) == std::make_pair(0, 1)) {
+      EXPECT_NEAR(e.normal.dot(in_plane(e)), 1.0, 1e-12);
+    }
+  }
+}
+
+// Two fibers crossing at a right angle, b pressed onto a from above (+z). The sign of the
+// tangents' dot product, which picks one of the two bisectors, flips as b turns by +-0.01 rad
+// about z; the normals must not follow that flip: each update keeps the cutting plane that
+// keeps the normal closest to its current one. Elements off the crossing's centre (a wide
+// detection margin) tilt by up to 0.78 rad from the vertical; turning b by 0.01 rad moves their
+// normals by 0.004 rad, and choosing the bisector by that sign flipped them by 0.78 rad.
+TEST(NormalUpdate, NormalsAtARightAngleCrossingDoNotFlip) {
+  const double r = 1e-4, length = 20 * r;
+  Case c = base_case();
+  c.fibers.push_back(polyline("a", {Vec3(-0.5 * length, 0, 0), Vec3(0.5 * length, 0, 0)}, r, 10));
+  c.fibers.push_back(polyline("b", {Vec3(0, -0.5 * length, 1.98 * r), Vec3(0, 0.5 * length, 1.98 * r)}, r, 10));
+  const Model model = build_model(c);
+  ContactSpec spec;
+  spec.enabled = true;
+  spec.margin = 2.0 * r;   // a zone long enough for elements off the crossing's centre
+  spec.spacing = 0.25 * r;
+  ContactManager manager(model, spec);
+  const VecX q0 = model.reference;
+  std::vector<ContactElement> contacts = manager.detect(q0, q0, {});
+  ASSERT_GE(contacts.size(), 3u);
+  double off_centre = 0.0;  // the largest tilt of a normal from the vertical at the detection
+  for (const ContactElement& e : contacts) off_centre = std::max(off_centre, std::acos(std::min(1.0, e.normal.z())));
+  EXPECT_GT(off_centre, 0.05);
+  std::printf("%zu elements, largest tilt %.3f rad\n", contacts.size(), off_centre);
+  // b turned about the vertical axis through the crossing by `angle` (positions only; the
+  // section vectors turn alike).
+  const auto turned = [&](double angle) {
+    VecX q = q0;
+    const Eigen::Matrix3d rot = Eigen::AngleAxisd(angle, Vec3::UnitZ()).toRotationMatrix();
+    const Fiber& f = model.fibers[1];
+    for (Index k = f.first_node; k < f.first_node + f.num_nodes; ++k) {
+      const Vec3 x = q0.segment<3>(9 * k);
+      q.segment<3>(9 * k) = rot * Vec3(x.x(), x.y(), 0.0) + Vec3(0, 0, x.z());
+      q.segment<3>(9 * k + 3) = rot * q0.segment<3>(9 * k + 3);
+      q.segment<3>(9 * k + 6) = rot * q0.segment<3>(9 * k + 6);
+    }
+    return q;
+  };
+  const std::vector<ContactElement> before = contacts;
+  double largest = 0.0;
+  for (const double angle : {0.01, -0.01, 0.01, -0.01}) {
+    manager.update_normals(contacts, turned(angle));
+    for (size_t k = 0; k < contacts.size(); ++k)
+      largest = std::max(largest, std::acos(std::clamp(contacts[k].normal.dot(before[k].normal), -1.0, 1.0)));
+  }
+  EXPECT_LT(largest, 0.02);  // b turned by 0.01 rad
 }
 
 TEST(BroadPhase, CandidatePairsEqualBruteForce) {
