@@ -6,6 +6,8 @@
 //   BM_ContactAssembly/threads:T  Problem::evaluate (gradient + Hessian) with the contact
 //                                 elements minus the same without them: reported as contact
 //                                 elements per second (target >= 1e6 per core)
+//   BM_UpdateNormals              ContactManager::update_normals on the same elements (once
+//                                 per normal update, before each Newton solve of the loop)
 //
 // Run with OMP_WAIT_POLICY=passive.
 #include <benchmark/benchmark.h>
@@ -16,6 +18,7 @@
 #include <memory>
 
 #include "bench_common.hpp"
+#include "fibra/contact/contact_manager.hpp"
 #include "fibra/contact/detection.hpp"
 #include "fibra/solver/problem.hpp"
 
@@ -97,6 +100,23 @@ BENCHMARK(BM_ContactAssembly)
     ->ArgNames({"threads", "spacing_um"})
     ->Unit(benchmark::kMillisecond)
     ->UseManualTime();
+
+void BM_UpdateNormals(benchmark::State& state) {
+  ContactBundle& b = bundle();
+  ContactSpec spec;
+  spec.enabled = true;
+  ContactManager manager(b.model, spec);
+  std::vector<ContactElement> contacts = b.detection.elements;
+  double turn = 0.0;
+  for (auto _ : state) {
+    turn = manager.update_normals(contacts, b.q);
+    benchmark::DoNotOptimize(turn);
+  }
+  state.counters["contact_elements"] = static_cast<double>(contacts.size());
+  state.counters["elements_per_second"] =
+      benchmark::Counter(static_cast<double>(contacts.size()), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_UpdateNormals)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 
