@@ -8,6 +8,8 @@
 //   BM_CholmodAnalyze             symbolic analysis (METIS ordering, supernodes), once
 //   BM_CholmodFactorize/blas_threads:B  numeric supernodal LL^T with B OpenBLAS threads
 //   BM_CholmodSolve               forward/back substitution for one right-hand side
+//   BM_CholmodPrecondition        the same with the factor rounded to floats (CG's preconditioner;
+//                                 two threads when OpenMP has them)
 //   BM_NewtonIteration/threads:2/blas_threads:B  assembly + factorization + solve (target < 1 s)
 //   BM_EigenFactorize/fibers:F    Eigen SimplicialLDLT numeric factorization (fallback)
 //   BM_EigenSolve/fibers:F        Eigen solve
@@ -19,6 +21,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <tuple>
 
 #include "bench_common.hpp"
 #include "fibra/solver/blas_threads.hpp"
@@ -40,12 +43,16 @@ Bundle& bundle(int fibers = kFibers) {
   return *b;
 }
 
-/// A solver of the given kind, analysed once on the bundle's pattern (outside any timing).
-LinearSolver& analysed(const std::string& kind, int fibers = kFibers) {
-  static std::map<std::pair<std::string, int>, std::unique_ptr<LinearSolver>> cache;
-  auto& s = cache[{kind, fibers}];
+/// A solver of the given kind, analysed once on the bundle's pattern (outside any timing). The
+/// factorization benchmarks keep CG's preconditioner in double (no single-precision copy timed
+/// with them); BM_CholmodPrecondition asks for the single one.
+LinearSolver& analysed(const std::string& kind, int fibers = kFibers,
+                       KrylovPrecision precision = KrylovPrecision::Double) {
+  static std::map<std::tuple<std::string, int, KrylovPrecision>, std::unique_ptr<LinearSolver>> cache;
+  auto& s = cache[{kind, fibers, precision}];
   if (!s) {
     s = make_linear_solver(kind);
+    s->set_krylov_precision(precision);
     Bundle& b = bundle(fibers);
     s->analyze(b.problem->pattern());
     // Warm-up: the first factorization allocates the numeric factor (page faults on ~150 MB).
@@ -220,6 +227,26 @@ void BM_CholmodSolve(benchmark::State& state) {
   add_size_counters(state, b);
 }
 BENCHMARK(BM_CholmodSolve)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+void BM_CholmodPrecondition(benchmark::State& state) {
+  Bundle& b = bundle();
+  LinearSolver& s = analysed("cholmod", kFibers, KrylovPrecision::Single);
+  if (s.factorize(b.hessian, 0.0) != FactorStatus::Ok) {
+    state.SkipWithError("factorization failed");
+    return;
+  }
+  const VecX rhs = -b.residual;
+  VecX x;
+  for (auto _ : state) {
+    s.precondition(rhs, x);
+    benchmark::DoNotOptimize(x.data());
+  }
+  VecX exact;
+  s.solve(rhs, exact);
+  state.counters["relative_difference"] = (x - exact).norm() / exact.norm();
+  add_size_counters(state, b);
+}
+BENCHMARK(BM_CholmodPrecondition)->UseRealTime()->Unit(benchmark::kMillisecond);
 
 void BM_NewtonIteration(benchmark::State& state) {
   Bundle& b = bundle();

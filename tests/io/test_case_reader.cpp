@@ -320,6 +320,7 @@ TEST(CaseReader, MinimalCaseTakesDefaults) {
   EXPECT_EQ(c.solver.max_cuts, solver_defaults.max_cuts);
   EXPECT_EQ(c.solver.line_search, solver_defaults.line_search);
   EXPECT_EQ(c.solver.linear_solver, "cholmod");
+  EXPECT_EQ(c.solver.krylov_precision, "auto");
   EXPECT_TRUE(c.bodies.empty());
   EXPECT_TRUE(c.bindings.empty());
   EXPECT_TRUE(c.steps[0].bodies.empty());
@@ -609,6 +610,8 @@ const std::vector<BadCase> kBadCases = {
     {"MaxCutsNegative", "max_cuts = 5", "max_cuts = -1", "solver.max_cuts", "must be >= 0"},
     {"KrylovIterationsNegative", "max_cuts = 5", "max_cuts = 5\nkrylov_iterations = -1",
      "solver.krylov_iterations", "must be >= 0"},
+    {"KrylovPrecisionUnknown", "max_cuts = 5", "max_cuts = 5\nkrylov_precision = \"singel\"",
+     "solver.krylov_precision", "expected \"auto\", \"single\" or \"double\", got \"singel\" (did you mean \"single\"?)"},
     {"KrylovToleranceOne", "max_cuts = 5", "max_cuts = 5\nkrylov_tolerance = 1.0", "solver.krylov_tolerance",
      "expected a number in (0, 1)"},
     {"TestToleranceOne", "max_cuts = 5", "max_cuts = 5\ntest_tolerance = 1", "solver.test_tolerance",

@@ -140,6 +140,7 @@ line_search = false
 test_predictor = false
 linear_solver = "eigen"
 ordering = "amd"
+krylov_precision = "single"
 max_step = 1e-4
 binding_tolerance = 3e-7
 max_binding_updates = 7

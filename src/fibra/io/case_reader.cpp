@@ -1635,7 +1635,7 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
              {"residual_tolerance", "displacement_tolerance", "max_iterations", "max_cuts",
               "line_search", "test_predictor", "linear_solver", "ordering", "binding_tolerance", "max_binding_updates",
               "binding_stiffness", "max_step", "weave_drag", "relax_drag", "drag_axial", "relax_tolerance", "test_tolerance", "pseudo_tolerance",
-              "krylov_iterations", "krylov_tolerance"});
+              "krylov_iterations", "krylov_tolerance", "krylov_precision"});
   SolverSpec s;
   if (const Value* v = find(t, "residual_tolerance")) {
     s.residual_tolerance = positive(*v, join(path, "residual_tolerance"));
@@ -1668,6 +1668,17 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
       fail(key,
            fmt::format("expected \"metis\", \"amd\" or \"auto\", got \"{}\"{}", s.ordering,
                        did_you_mean(s.ordering, words)),
+           v);
+    }
+  }
+  if (const Value* v = find(t, "krylov_precision")) {
+    const std::string key = join(path, "krylov_precision");
+    s.krylov_precision = to_string(*v, key);
+    if (s.krylov_precision != "auto" && s.krylov_precision != "single" && s.krylov_precision != "double") {
+      const Keys words = {"auto", "single", "double"};
+      fail(key,
+           fmt::format("expected \"auto\", \"single\" or \"double\", got \"{}\"{}", s.krylov_precision,
+                       did_you_mean(s.krylov_precision, words)),
            v);
     }
   }

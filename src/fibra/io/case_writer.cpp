@@ -292,6 +292,7 @@ void write_solver(std::string& out, const SolverSpec& s) {
   out += fmt::format("pseudo_tolerance = {}\n", number(s.pseudo_tolerance));
   out += fmt::format("krylov_iterations = {}\n", s.krylov_iterations);
   out += fmt::format("krylov_tolerance = {}\n", number(s.krylov_tolerance));
+  out += fmt::format("krylov_precision = {}\n", quoted(s.krylov_precision));
 }
 
 void write_contact(std::string& out, const ContactSpec& c) {

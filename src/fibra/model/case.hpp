@@ -221,6 +221,7 @@ struct SolverSpec {
   double pseudo_tolerance = 1e-6;         ///< Newton tolerance of pseudo-time increments (weave; relax/test while the drag force is above its tolerance)
   int krylov_iterations = 20;             ///< CG iterations preconditioned by the last factorization; 0 = factorize every iteration
   double krylov_tolerance = 1e-3;         ///< CG stops at this residual relative to the Newton residual (inexact Newton)
+  std::string krylov_precision = "auto";  ///< CG's preconditioning factor: "single" (rounded to floats), "double", "auto" (single for large factors)
   double max_step = -1;                   ///< largest motion per Newton iteration [m]; < 0 = automatic (half the smallest radius with contact, none without), 0 = none
   double binding_tolerance = 1e-8;        ///< largest binding violation, relative to the model size
   int max_binding_updates = 30;           ///< multiplier updates per increment (augmented Lagrangian)

@@ -50,6 +50,13 @@ class EigenSolver final : public LinearSolver {
 
 }  // namespace
 
+KrylovPrecision krylov_precision_from(const std::string& name) {
+  if (name == "auto") return KrylovPrecision::Auto;
+  if (name == "single") return KrylovPrecision::Single;
+  if (name == "double") return KrylovPrecision::Double;
+  throw std::invalid_argument("unknown krylov precision \"" + name + "\" (expected \"auto\", \"single\" or \"double\")");
+}
+
 std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name, const std::string& ordering) {
   if (name == "cholmod") return make_cholmod_solver(ordering);
   if (name == "eigen") return std::make_unique<EigenSolver>();

@@ -13,6 +13,20 @@ namespace fibra {
 /// Outcome of a factorization.
 enum class FactorStatus { Ok, NotPositiveDefinite, Failed };
 
+/// Precision of the factor precondition() uses.
+enum class KrylovPrecision {
+  Auto,    ///< single for factors of at least kSingleFactorNonzeros nonzeros, double below
+  Single,  ///< the factor rounded to floats (SingleFactor)
+  Double,  ///< the factor itself
+};
+
+/// Factors of at least this many nonzeros precondition in single precision under Auto: there
+/// the substitutions stream hundreds of MB per CG iteration (docs/performance.md, session 19).
+constexpr double kSingleFactorNonzeros = 1e7;
+
+/// Parses "auto", "single" or "double"; throws std::invalid_argument otherwise.
+KrylovPrecision krylov_precision_from(const std::string& name);
+
 /// Symmetric sparse direct solver working on a BlockPattern's upper CSC storage.
 class LinearSolver {
  public:
@@ -27,6 +41,15 @@ class LinearSolver {
   virtual bool has_factor() const = 0;
   /// Solves A x = b with the last successful factorization.
   virtual void solve(const VecX& b, VecX& x) = 0;
+  /// x ~ A^-1 b with the last successful factorization, as a preconditioner: by default the
+  /// exact solve; CHOLMOD with single-precision preconditioning uses the factor rounded to
+  /// floats (SingleFactor).
+  virtual void precondition(const VecX& b, VecX& x) { solve(b, x); }
+  /// Chooses the precision precondition() uses from the next factorization on (back ends
+  /// without a single-precision copy ignore it).
+  virtual void set_krylov_precision(KrylovPrecision) {}
+  /// True when the last factorization made a single-precision copy for precondition().
+  virtual bool single_precision_preconditioner() const { return false; }
   /// Short name ("cholmod", "eigen").
   virtual std::string name() const = 0;
   /// Nonzeros in the factor after the last factorization (0 if unknown).

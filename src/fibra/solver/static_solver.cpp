@@ -54,6 +54,7 @@ StaticSolver::StaticSolver(const Case& c, const Model& model)
       m_problem(std::make_unique<Problem>(model, m_bodies.get())),
       m_linear(make_linear_solver(c.solver.linear_solver, c.solver.ordering)), m_program(std::make_unique<Program>()),
       m_q(model.reference) {
+  m_linear->set_krylov_precision(krylov_precision_from(c.solver.krylov_precision));
   const Index n = model.num_dofs();
   m_program->force_start = m_program->force_end = VecX::Zero(n);
   m_program->fix_mask.assign(n, 0);
@@ -542,7 +543,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     m_rhs = -r;
     if (opt.krylov_iterations > 0 && m_reuse_factor && m_linear->has_factor()) {
       const PcgResult cg = pcg(
-          m_problem->pattern(), m_hessian, 0.0, m_rhs, dq, [this](const VecX& b, VecX& x) { m_linear->solve(b, x); },
+          m_problem->pattern(), m_hessian, 0.0, m_rhs, dq, [this](const VecX& b, VecX& x) { m_linear->precondition(b, x); },
           m_force_scale, opt.krylov_tolerance, opt.krylov_iterations, m_pcg);
       m_stats.krylov_iterations += cg.iterations;
       solved = cg.converged;

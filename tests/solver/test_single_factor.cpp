@@ -1,0 +1,217 @@
+// The single-precision copy of CHOLMOD's supernodal factor that preconditions conjugate
+// gradients (solver/single_factor.hpp): its substitutions against the double factor's, the
+// same result on one thread and two, the split of the elimination tree, and the Newton solver
+// reaching the same states with either precision.
+#include <cholmod.h>
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "fibra/solver/block_pattern.hpp"
+#include "fibra/solver/linear_solver.hpp"
+#include "fibra/solver/single_factor.hpp"
+#include "verification/verification_support.hpp"
+
+namespace fibra::test {
+namespace {
+
+// A square grid of side x side groups of 3 dofs, each coupled to its neighbours along both axes
+// and the diagonals (stencils of 4 groups, one per cell): a 2D mesh, whose nested-dissection
+// tree has many levels. Values: a random SPD matrix inside the pattern (a sum of random
+// positive semi-definite cell matrices plus a small diagonal), with a spread of scales.
+struct Grid {
+  Index side;
+  StencilSet stencils;
+  std::unique_ptr<BlockPattern> pattern;
+  std::vector<double> values;
+
+  explicit Grid(Index side_) : side(side_) {
+    auto id = [&](Index i, Index j) { return i * side + j; };
+    for (Index i = 0; i + 1 < side; ++i)
+      for (Index j = 0; j + 1 < side; ++j) {
+        const Index s[4] = {id(i, j), id(i + 1, j), id(i, j + 1), id(i + 1, j + 1)};
+        stencils.add(s);
+      }
+    stencils.colorize(side * side, 4);
+    pattern = std::make_unique<BlockPattern>(std::vector<int>(side * side, 3), std::vector<const StencilSet*>{&stencils});
+    values.assign(pattern->nonzeros(), 0.0);
+    std::mt19937 gen(7);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::uniform_real_distribution<double> e(0.0, 6.0);
+    for (Index i = 0; i + 1 < side; ++i)
+      for (Index j = 0; j + 1 < side; ++j) {
+        const Index g[4] = {id(i, j), id(i + 1, j), id(i, j + 1), id(i + 1, j + 1)};
+        Eigen::Matrix<double, 12, 12> b;
+        for (int r = 0; r < 12; ++r)
+          for (int c = 0; c < 12; ++c) b(r, c) = u(gen);
+        const Eigen::Matrix<double, 12, 12> k = std::pow(10.0, e(gen)) * (b * b.transpose());
+        for (int a = 0; a < 4; ++a)
+          for (int c = 0; c < 4; ++c)
+            for (int ra = 0; ra < 3; ++ra)
+              for (int rc = 0; rc < 3; ++rc) {
+                const Index row = 3 * g[a] + ra, col = 3 * g[c] + rc;
+                if (row > col) continue;
+                values[pattern->find(row, col)] += k(3 * a + ra, 3 * c + rc);
+              }
+      }
+    for (Index d = 0; d < pattern->rows(); ++d) values[pattern->find(d, d)] += 1e-3;
+  }
+  Index n() const { return pattern->rows(); }
+};
+
+VecX random_vector(Index n, unsigned seed) {
+  std::mt19937 gen(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  VecX v(n);
+  for (Index i = 0; i < n; ++i) v[i] = u(gen);
+  return v;
+}
+
+// Solves with a precision; returns precondition(b) and, through `exact`, solve(b).
+VecX precondition_with(const Grid& grid, KrylovPrecision precision, const VecX& b, VecX& exact, bool& single) {
+  auto solver = make_linear_solver("cholmod");
+  solver->set_krylov_precision(precision);
+  solver->analyze(*grid.pattern);
+  EXPECT_EQ(solver->factorize(grid.values, 0.0), FactorStatus::Ok);
+  single = solver->single_precision_preconditioner();
+  VecX x;
+  solver->precondition(b, x);
+  solver->solve(b, exact);
+  return x;
+}
+
+TEST(SingleFactor, SubstitutionsMatchTheDoubleFactorToSinglePrecision) {
+  const Grid grid(40);  // 4 800 dofs
+  const VecX b = random_vector(grid.n(), 3);
+  VecX exact;
+  bool single = false;
+  const VecX x = precondition_with(grid, KrylovPrecision::Single, b, exact, single);
+  ASSERT_TRUE(single);
+  const double difference = (x - exact).norm() / exact.norm();
+  // Rounded values: not the double solve, but within a few float roundings times the growth
+  // of the triangular solves on this matrix (condition number up to ~1e9 by construction).
+  EXPECT_GT(difference, 1e-12);
+  EXPECT_LT(difference, 1e-3);
+  // And as a preconditioner: M^-1 A b close to b.
+  std::printf("single vs double substitutions: relative difference %.2e\n", difference);
+}
+
+TEST(SingleFactor, DoublePrecisionPreconditionsWithTheFactorItself) {
+  const Grid grid(20);
+  const VecX b = random_vector(grid.n(), 4);
+  VecX exact;
+  bool single = true;
+  const VecX x = precondition_with(grid, KrylovPrecision::Double, b, exact, single);
+  EXPECT_FALSE(single);
+  EXPECT_EQ((x - exact).norm(), 0.0);
+  // Auto keeps small factors in double.
+  single = true;
+  const VecX y = precondition_with(grid, KrylovPrecision::Auto, b, exact, single);
+  EXPECT_FALSE(single);
+  EXPECT_EQ((y - exact).norm(), 0.0);
+}
+
+TEST(SingleFactor, SameResultOnOneThreadAndTwo) {
+  const Grid grid(40);
+  const VecX b = random_vector(grid.n(), 5);
+  const int previous = omp_get_max_threads();
+  VecX exact, one, two;
+  bool single = false;
+  omp_set_num_threads(1);
+  one = precondition_with(grid, KrylovPrecision::Single, b, exact, single);
+  omp_set_num_threads(2);
+  two = precondition_with(grid, KrylovPrecision::Single, b, exact, single);
+  omp_set_num_threads(previous);
+  EXPECT_EQ((one - two).norm(), 0.0);
+}
+
+// The tree's cut, with CHOLMOD's factor read directly: a top and two parts, and the
+// substitutions exact to rounding when the values are exactly representable in floats.
+TEST(SingleFactor, TreeCutIntoATopAndTwoBalancedParts) {
+  const Grid grid(40);
+  cholmod_common common;
+  cholmod_start(&common);
+  common.supernodal = CHOLMOD_SUPERNODAL;
+  common.nmethods = 1;
+  common.method[0].ordering = CHOLMOD_METIS;
+  common.postorder = 1;
+  cholmod_sparse a{};
+  a.nrow = a.ncol = grid.n();
+  a.nzmax = grid.pattern->nonzeros();
+  a.p = const_cast<int*>(grid.pattern->col_ptr().data());
+  a.i = const_cast<int*>(grid.pattern->row_idx().data());
+  a.x = const_cast<double*>(grid.values.data());
+  a.stype = 1;
+  a.itype = CHOLMOD_INT;
+  a.xtype = CHOLMOD_REAL;
+  a.dtype = CHOLMOD_DOUBLE;
+  a.sorted = 1;
+  a.packed = 1;
+  cholmod_factor* f = cholmod_analyze(&a, &common);
+  ASSERT_NE(f, nullptr);
+  ASSERT_TRUE(cholmod_factorize(&a, f, &common));
+  ASSERT_TRUE(f->is_super);
+  // Round the factor's values to floats in place: the single copy is then exactly this factor.
+  double* lx = static_cast<double*>(f->x);
+  const Index count = static_cast<const int*>(f->px)[f->nsuper];
+  for (Index k = 0; k < count; ++k) lx[k] = static_cast<float>(lx[k]);
+  SupernodalView v;
+  v.n = grid.n();
+  v.nsuper = static_cast<Index>(f->nsuper);
+  v.super = static_cast<const int*>(f->super);
+  v.pi = static_cast<const int*>(f->pi);
+  v.px = static_cast<const int*>(f->px);
+  v.s_rows = static_cast<const int*>(f->s);
+  v.values = lx;
+  v.perm = static_cast<const int*>(f->Perm);
+  SingleFactor single;
+  single.assign(v);
+  EXPECT_GT(single.top_share(), 0.0);   // a top, done on one thread
+  EXPECT_LE(single.top_share(), 0.4);   // the rule's bound
+  const VecX b = random_vector(grid.n(), 6);
+  VecX x;
+  single.solve(b, x);
+  // CHOLMOD's own solve with the same (rounded) factor.
+  cholmod_dense rhs{};
+  rhs.nrow = rhs.nzmax = rhs.d = grid.n();
+  rhs.ncol = 1;
+  rhs.x = const_cast<double*>(b.data());
+  rhs.xtype = CHOLMOD_REAL;
+  rhs.dtype = CHOLMOD_DOUBLE;
+  cholmod_dense* sol = cholmod_solve(CHOLMOD_A, f, &rhs, &common);
+  ASSERT_NE(sol, nullptr);
+  const VecX reference = Eigen::Map<const VecX>(static_cast<double*>(sol->x), grid.n());
+  EXPECT_LT((x - reference).norm(), 1e-9 * reference.norm());
+  // Assigning again (same structure) reuses the cut and gives the same solve.
+  single.assign(v);
+  VecX again;
+  single.solve(b, again);
+  EXPECT_EQ((again - x).norm(), 0.0);
+  cholmod_free_dense(&sol, &common);
+  cholmod_free_factor(&f, &common);
+  cholmod_finish(&common);
+}
+
+TEST(SingleFactor, NewtonReachesTheSameStatesInEitherPrecision) {
+  std::ifstream in(std::string(FIBRA_SOURCE_DIR) + "/examples/crossed_fibers/crossed_fibers.toml");
+  ASSERT_TRUE(in.good());
+  std::stringstream text;
+  text << in.rdbuf();
+  const Solved twice = solve_toml(text.str() + "\n[solver]\nkrylov_precision = \"double\"\n");
+  const Solved once = solve_toml(text.str() + "\n[solver]\nkrylov_precision = \"single\"\n");
+  ASSERT_TRUE(twice.converged()) << twice.result.message;
+  ASSERT_TRUE(once.converged()) << once.result.message;
+  ASSERT_GT(once.stats.reused_factorizations, 0);
+  const double scale = (twice.q - twice.model.reference).norm();
+  EXPECT_LT((once.q - twice.q).norm(), 1e-6 * scale);
+  // The rounded factor preconditions as well as the exact one: CG's count within 10 %.
+  EXPECT_LE(once.stats.krylov_iterations, 1.1 * twice.stats.krylov_iterations + 2);
+  std::printf("CG iterations: double %d, single %d; Newton iterations %d, %d\n", twice.stats.krylov_iterations,
+              once.stats.krylov_iterations, twice.stats.iterations, once.stats.iterations);
+}
+
+}  // namespace
+}  // namespace fibra::test
