@@ -158,13 +158,19 @@ void SingleFactor::split_tree() {
   m_top_share = total > 0.0 ? top_work / total : 0.0;
 }
 
+SingleFactor::Node SingleFactor::node(Index s) const {
+  Node d;
+  d.first_column = m_super[s];
+  d.nscol = m_super[s + 1] - d.first_column;
+  d.nsrow = m_pi[s + 1] - m_pi[s];
+  d.below = d.nsrow - d.nscol;
+  d.rows = m_s_rows.data() + m_pi[s];
+  d.l = m_values.data() + m_px[s];
+  return d;
+}
+
 void SingleFactor::forward(Index s, Index end_column, double* y, double* delta, double* t) const {
-  const Index k1 = m_super[s];
-  const Index nscol = m_super[s + 1] - k1;
-  const Index nsrow = m_pi[s + 1] - m_pi[s];
-  const Index below = nsrow - nscol;
-  const int* rows = m_s_rows.data() + m_pi[s];
-  const float* l = m_values.data() + m_px[s];
+  const auto [k1, nscol, nsrow, below, rows, l] = node(s);
   double* ys = y + k1;
   // The diagonal block's triangle by columns.
   for (Index j = 0; j < nscol; ++j) {
@@ -201,12 +207,7 @@ void SingleFactor::forward(Index s, Index end_column, double* y, double* delta, 
 }
 
 void SingleFactor::backward(Index s, double* y, double* t) const {
-  const Index k1 = m_super[s];
-  const Index nscol = m_super[s + 1] - k1;
-  const Index nsrow = m_pi[s + 1] - m_pi[s];
-  const Index below = nsrow - nscol;
-  const int* rows = m_s_rows.data() + m_pi[s];
-  const float* l = m_values.data() + m_px[s];
+  const auto [k1, nscol, nsrow, below, rows, l] = node(s);
   double* ys = y + k1;
   if (below > 0) {
     // The rows below gathered once; their dot products with the columns four at a time.

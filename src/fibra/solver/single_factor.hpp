@@ -57,6 +57,14 @@ class SingleFactor {
   struct Range {
     Index first = 0, last = 0, end_column = 0;
   };
+  /// Supernode s: its first column, column and row counts, rows below its diagonal block, row
+  /// indices and values.
+  struct Node {
+    Index first_column, nscol, nsrow, below;
+    const int* rows;
+    const float* l;
+  };
+  Node node(Index s) const;
   void split_tree();
   void forward(Index s, Index end_column, double* y, double* delta, double* t) const;
   void backward(Index s, double* y, double* t) const;
