@@ -467,6 +467,17 @@ class Reader {
     return v.text;
   }
 
+  /// A string that must be one of `words`: `expected "a", "b" or "c", got "x"` otherwise, with
+  /// the nearest word suggested.
+  std::string one_of(const Value& v, const std::string& key, const Keys& words) const {
+    std::string text = to_string(v, key);
+    if (std::find(words.begin(), words.end(), text) != words.end()) return text;
+    std::string list;
+    for (std::size_t i = 0; i < words.size(); ++i)
+      list += fmt::format("{}\"{}\"", i == 0 ? "" : i + 1 == words.size() ? " or " : ", ", words[i]);
+    fail(key, fmt::format("expected {}, got \"{}\"{}", list, text, did_you_mean(text, words)), &v);
+  }
+
   std::string to_name(const Value& v, const std::string& key) const {
     std::string name = to_string(v, key);
     if (name.empty()) fail(key, "expected a non-empty name, got an empty string", &v);
@@ -662,21 +673,10 @@ class Reader {
 
 MaterialSpec Reader::read_material(const Value& t, const std::string& path) const {
   MaterialSpec m;
-  if (const Value* v = find(t, "model")) {
-    const std::string key = join(path, "model");
-    const std::string model = to_string(*v, key);
-    if (model == "isotropic") {
-      m.model = MaterialSpec::Model::Isotropic;
-    } else if (model == "transverse") {
-      m.model = MaterialSpec::Model::Transverse;
-    } else {
-      const Keys models = {"isotropic", "transverse"};
-      fail(key,
-           fmt::format("expected \"isotropic\" or \"transverse\", got \"{}\"{}", model,
-                       did_you_mean(model, models)),
-           v);
-    }
-  }
+  if (const Value* v = find(t, "model"))
+    m.model = one_of(*v, join(path, "model"), {"isotropic", "transverse"}) == "isotropic"
+                  ? MaterialSpec::Model::Isotropic
+                  : MaterialSpec::Model::Transverse;
   if (m.model == MaterialSpec::Model::Isotropic) {
     const std::string_view only = "only allowed with model = \"transverse\"";
     check_keys(t, path, {"name", "model", "young", "poisson"},
@@ -1571,19 +1571,9 @@ TowSpec Reader::read_tow(const Value& t, const std::string& path, const std::vec
     }
   }
   {
-    const std::string key = join(path, "direction");
     const Value& v = require(t, path, "direction", "\"warp\" or \"weft\"");
-    const std::string direction = to_string(v, key);
-    if (direction == "warp") {
-      tow.direction = TowSpec::Direction::Warp;
-    } else if (direction == "weft") {
-      tow.direction = TowSpec::Direction::Weft;
-    } else {
-      const Keys words = {"warp", "weft"};
-      fail(key,
-           fmt::format("expected \"warp\" or \"weft\", got \"{}\"{}", direction, did_you_mean(direction, words)),
-           &v);
-    }
+    tow.direction = one_of(v, join(path, "direction"), {"warp", "weft"}) == "warp" ? TowSpec::Direction::Warp
+                                                                                  : TowSpec::Direction::Weft;
   }
   {
     const std::string key = join(path, "index");
@@ -1649,39 +1639,11 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   if (const Value* v = find(t, "max_cuts")) s.max_cuts = to_int(*v, join(path, "max_cuts"), 0);
   if (const Value* v = find(t, "line_search")) s.line_search = to_bool(*v, join(path, "line_search"));
   if (const Value* v = find(t, "test_predictor")) s.test_predictor = to_bool(*v, join(path, "test_predictor"));
-  if (const Value* v = find(t, "linear_solver")) {
-    const std::string key = join(path, "linear_solver");
-    s.linear_solver = to_string(*v, key);
-    if (s.linear_solver != "cholmod" && s.linear_solver != "eigen") {
-      const Keys words = {"cholmod", "eigen"};
-      fail(key,
-           fmt::format("expected \"cholmod\" or \"eigen\", got \"{}\"{}", s.linear_solver,
-                       did_you_mean(s.linear_solver, words)),
-           v);
-    }
-  }
-  if (const Value* v = find(t, "ordering")) {
-    const std::string key = join(path, "ordering");
-    s.ordering = to_string(*v, key);
-    if (s.ordering != "metis" && s.ordering != "amd" && s.ordering != "auto") {
-      const Keys words = {"metis", "amd", "auto"};
-      fail(key,
-           fmt::format("expected \"metis\", \"amd\" or \"auto\", got \"{}\"{}", s.ordering,
-                       did_you_mean(s.ordering, words)),
-           v);
-    }
-  }
-  if (const Value* v = find(t, "krylov_precision")) {
-    const std::string key = join(path, "krylov_precision");
-    s.krylov_precision = to_string(*v, key);
-    if (s.krylov_precision != "auto" && s.krylov_precision != "single" && s.krylov_precision != "double") {
-      const Keys words = {"auto", "single", "double"};
-      fail(key,
-           fmt::format("expected \"auto\", \"single\" or \"double\", got \"{}\"{}", s.krylov_precision,
-                       did_you_mean(s.krylov_precision, words)),
-           v);
-    }
-  }
+  if (const Value* v = find(t, "linear_solver"))
+    s.linear_solver = one_of(*v, join(path, "linear_solver"), {"cholmod", "eigen"});
+  if (const Value* v = find(t, "ordering")) s.ordering = one_of(*v, join(path, "ordering"), {"metis", "amd", "auto"});
+  if (const Value* v = find(t, "krylov_precision"))
+    s.krylov_precision = one_of(*v, join(path, "krylov_precision"), {"auto", "single", "double"});
   if (const Value* v = find(t, "binding_tolerance")) {
     s.binding_tolerance = positive(*v, join(path, "binding_tolerance"));
   }
