@@ -5,7 +5,6 @@
 #include <fmt/core.h>
 
 #include <chrono>
-#include <cstdlib>
 #include <stdexcept>
 
 #include "fibra/core/debug.hpp"

@@ -104,13 +104,19 @@ void SingleFactor::split_tree() {
     count[p] += count[s];
     first[p] = std::min(first[p], first[s]);
   }
-  // Subtrees must be contiguous ranges (CHOLMOD postorders its supernodes); else one part.
+  // Subtrees must be contiguous ranges (CHOLMOD postorders its supernodes); else one part
+  // holding every supernode, on one thread.
   for (Index s = 0; s < ns && postordered; ++s) postordered = s - first[s] + 1 == count[s];
+  if (!postordered) {
+    m_part[0] = {{0, ns - 1, m_n}};
+    m_top_share = 0.0;
+    return;
+  }
   const double total = std::accumulate(roots.begin(), roots.end(), 0.0, [&](double a, Index r) { return a + work[r]; });
   std::vector<Index> open = roots, top;
   std::vector<Index> bins[2];
   double top_work = 0.0;
-  for (int round = 0; postordered && round < 256; ++round) {
+  for (int round = 0; round < 256; ++round) {
     // Largest first into the lighter bin.
     std::sort(open.begin(), open.end(), [&](Index a, Index b) { return work[a] > work[b] || (work[a] == work[b] && a < b); });
     double load[2] = {0.0, 0.0};
@@ -124,22 +130,15 @@ void SingleFactor::split_tree() {
     if (std::max(load[0], load[1]) <= 1.05 * std::min(load[0], load[1]) || open.empty()) break;
     // Too uneven: the largest subtree's root goes to the top, its children are shared out.
     const Index s = open.front();
-    if (top_work + (work[s] - [&] {
-          double w = 0.0;
-          for (Index c : children[s]) w += work[c];
-          return w;
-        }()) > 0.4 * total)
-      break;
-    open.erase(open.begin());
     double own = work[s];
-    for (Index c : children[s]) {
-      own -= work[c];
-      open.push_back(c);
-    }
+    for (Index c : children[s]) own -= work[c];
+    if (top_work + own > 0.4 * total) break;
+    open.erase(open.begin());
+    open.insert(open.end(), children[s].begin(), children[s].end());
     top_work += own;
     top.push_back(s);
   }
-  if (!postordered || bins[0].empty() || bins[1].empty()) {
+  if (bins[0].empty() || bins[1].empty()) {
     // One part holding the whole tree (no top): still correct, on one thread.
     bins[0] = roots;
     bins[1].clear();
@@ -150,7 +149,6 @@ void SingleFactor::split_tree() {
     std::sort(bins[b].begin(), bins[b].end());
     for (Index r : bins[b]) m_part[b].push_back({first[r], r, m_super[r + 1]});
   }
-  if (!postordered) m_part[0] = {{0, ns - 1, m_n}};
   std::sort(top.begin(), top.end());
   m_top = top;
   for (Index s : m_top)

@@ -42,8 +42,6 @@ class SingleFactor {
   /// Copies (and rounds) the factor's values; the structure is copied too, so the view may be
   /// freed or refactored after. Reuses its storage when the sizes match.
   void assign(const SupernodalView& f);
-  /// True once assign() has been called.
-  bool ready() const { return m_n > 0; }
   /// x = P^T L~^-T L~^-1 P b. No allocation after the first call at a given size.
   void solve(const VecX& b, VecX& x);
   /// Bytes held by the rounded values.
