@@ -150,6 +150,7 @@ inline void expect_same_case(const Case& a, const Case& b, bool compare_fabric =
     EXPECT_EQ(x.strain, y.strain) << w;
     EXPECT_EQ(x.ratio, y.ratio) << w;
     EXPECT_EQ(x.angle, y.angle) << w;
+    EXPECT_EQ(x.free_height, y.free_height) << w;
     ASSERT_EQ(x.loads.size(), y.loads.size()) << w;
     for (std::size_t k = 0; k < x.loads.size(); ++k) {
       const std::string v = w + ".load[" + std::to_string(k) + "]";

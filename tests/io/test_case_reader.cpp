@@ -1354,6 +1354,7 @@ ratio = 0
 name = "shear"
 kind = "shear"
 angle = -25
+height = "free"
 
 [[step]]
 name = "more"
@@ -1367,6 +1368,8 @@ kind = "load"
   EXPECT_EQ(c.steps[3].ratio, 0.0);
   EXPECT_EQ(c.steps[4].kind, StepSpec::Kind::Shear);
   EXPECT_EQ(c.steps[4].angle, -25.0);
+  EXPECT_TRUE(c.steps[4].free_height);
+  EXPECT_FALSE(c.steps[2].free_height);
   EXPECT_EQ(c.steps[5].kind, StepSpec::Kind::Standard);
   EXPECT_EQ(c.steps[0].ratio, 1.0);  // defaults elsewhere
   const Case back = parse_case_toml(write_case_toml(c), "written.toml");
@@ -1376,6 +1379,7 @@ kind = "load"
     EXPECT_EQ(back.steps[i].strain, c.steps[i].strain) << i;
     EXPECT_EQ(back.steps[i].ratio, c.steps[i].ratio) << i;
     EXPECT_EQ(back.steps[i].angle, c.steps[i].angle) << i;
+    EXPECT_EQ(back.steps[i].free_height, c.steps[i].free_height) << i;
   }
 }
 
@@ -1700,6 +1704,10 @@ const std::vector<BadCase> kBadTowCases = {
     {"ShearWithoutAngle", "kind = \"relax\"", "kind = \"shear\"", "step[1].angle", "a shear step needs `angle`"},
     {"ShearAngleZero", "kind = \"relax\"", "kind = \"shear\"\nangle = 0", "step[1].angle",
      "expected an angle in degrees in (-80, 80), not 0, got 0"},
+    {"ShearHeightWord", "kind = \"relax\"", "kind = \"shear\"\nangle = 5\nheight = \"loose\"", "step[1].height",
+     "expected \"held\" or \"free\", got \"loose\""},
+    {"HeightOnBiaxial", "kind = \"relax\"", "kind = \"biaxial\"\nstrain = 0.01\nheight = \"free\"", "step[1].height",
+     "`height` belongs to kind = \"shear\" steps"},
     {"KindNotString", "kind = \"relax\"", "kind = 1", "step[1].kind", "expected a string, got an integer"},
     {"WeaveStepWithoutTows", kTowA + "\n" + kTowB + "\n" + kTowC, "", "step[0].kind",
      "a weave step needs tows: define [[tow]] entries (or a [fabric])", false},

@@ -1243,7 +1243,8 @@ BodyStepSpec Reader::read_step_body(const Value& t, const std::string& path,
 StepSpec Reader::read_step(const Value& t, const std::string& path, std::size_t k,
                            const std::vector<FiberSpec>& fibers, const std::vector<BodySpec>& bodies) const {
   check_keys(t, path,
-             {"name", "kind", "increments", "max_increments", "load", "displacement", "body", "strain", "ratio", "angle"});
+             {"name", "kind", "increments", "max_increments", "load", "displacement", "body", "strain", "ratio", "angle",
+              "height"});
   StepSpec step;
   if (const Value* v = find(t, "name")) {
     step.name = to_name(*v, join(path, "name"));
@@ -1273,13 +1274,13 @@ StepSpec Reader::read_step(const Value& t, const std::string& path, std::size_t 
   }
   // The test parameters: each only with its kind, and required there.
   const bool biaxial = step.kind == StepSpec::Kind::Biaxial, shear = step.kind == StepSpec::Kind::Shear;
-  for (const char* name : {"strain", "ratio", "angle"}) {
+  for (const char* name : {"strain", "ratio", "angle", "height"}) {
     const Value* v = find(t, name);
-    const bool belongs = std::string(name) == "angle" ? shear : biaxial;
-    if (v && !belongs)
+    const bool for_shear = std::string(name) == "angle" || std::string(name) == "height";
+    if (v && !(for_shear ? shear : biaxial))
       fail(join(path, name),
            fmt::format("`{}` belongs to {} steps; this step's kind is not", name,
-                       std::string(name) == "angle" ? "kind = \"shear\"" : "kind = \"biaxial\""),
+                       for_shear ? "kind = \"shear\"" : "kind = \"biaxial\""),
            v);
   }
   if (biaxial) {
@@ -1303,6 +1304,7 @@ StepSpec Reader::read_step(const Value& t, const std::string& path, std::size_t 
     step.angle = to_number(*v, join(path, "angle"));
     if (!(std::abs(step.angle) > 0.0 && std::abs(step.angle) < 80.0))
       fail(join(path, "angle"), fmt::format("expected an angle in degrees in (-80, 80), not 0, got {}", step.angle), v);
+    if (const Value* h = find(t, "height")) step.free_height = one_of(*h, join(path, "height"), {"held", "free"}) == "free";
   }
   if (const Value* v = find(t, "increments")) step.increments = to_int(*v, join(path, "increments"), 1);
   if (const Value* v = find(t, "max_increments")) {

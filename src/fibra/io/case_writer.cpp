@@ -246,7 +246,10 @@ void write_step(std::string& out, const StepSpec& s) {
   out += fmt::format("name = {}\n", quoted(s.name));
   out += fmt::format("kind = {}\n", quoted(StepSpec::kind_name(s.kind)));
   if (s.kind == StepSpec::Kind::Biaxial) out += fmt::format("strain = {}\nratio = {}\n", number(s.strain), number(s.ratio));
-  if (s.kind == StepSpec::Kind::Shear) out += fmt::format("angle = {}\n", number(s.angle));
+  if (s.kind == StepSpec::Kind::Shear) {
+    out += fmt::format("angle = {}\n", number(s.angle));
+    if (s.free_height) out += "height = \"free\"\n";
+  }
   out += fmt::format("increments = {}\n", s.increments);
   out += fmt::format("max_increments = {}\n", s.max_increments);
   for (const LoadSpec& l : s.loads) {

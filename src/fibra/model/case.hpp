@@ -196,6 +196,10 @@ struct StepSpec {
   double strain = 0;  ///< biaxial: warp axial strain at the step's end, from its start
   double ratio = 1;   ///< biaxial: weft elongation / warp elongation (0: weft edges free)
   double angle = 0;   ///< shear: shear angle at the step's end, from its start [degrees]
+  /// shear: the distance between the bottom and top edges held (the wefts stretch by
+  /// 1/cos(angle) - 1), or free (the top edge keeps the force it had across: the wefts keep
+  /// their tension and the sample's height shrinks as it shears).
+  bool free_height = false;
   int increments = 1;      ///< initial number of increments (the solver adapts)
   int max_increments = 0;  ///< 0 = 100 * increments
   std::vector<LoadSpec> loads;

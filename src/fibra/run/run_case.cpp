@@ -94,8 +94,10 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     const double lx = start[1].x() - start[0].x(), ly = start[3].y() - start[2].y();
     const double warp_strain = (centre[1].x() - centre[0].x()) / lx - 1.0;
     const double weft_strain = (centre[3].y() - centre[2].y()) / ly - 1.0;
+    // The shear angle: the turn of the line between the bottom and top edges' centres, from the
+    // offset along x since the start and the height now (the start's with the height held).
     const double offset = (centre[3].x() - centre[2].x()) - (start[3].x() - start[2].x());
-    const double angle = std::atan2(offset, ly) * 180.0 / std::numbers::pi;
+    const double angle = std::atan2(offset, centre[3].y() - centre[2].y()) * 180.0 / std::numbers::pi;
     curves << fmt::format("{},{},{},{},{},{},{},{},{},{},{}\n", step, increment, load, warp_strain, weft_strain,
                           force[1].x(), force[3].y(), angle, force[3].x(), elements, penetration);
     curves.flush();
