@@ -609,9 +609,10 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     // drag (relax and test steps), whose energy the drag makes convex: on a body twisting its
     // binding group (BindingGroup.TwistedByItsBodyThenOneMemberPushedAside: indefinite
     // tangents, linearized rotations) the damped steps failed increments that full steps pass.
-    // And far above the tolerance only, as below.
+    // And far above the equilibrium tolerance only (not the pseudo-time one, 1e-6: that cycle
+    // went on around 1e-3).
     const bool stalled =
-        (searching && history[k - 1] > 1e3 * m_newton_tolerance) || (k >= 4 && history[k - 1] > history[k - 2]) ||
+        (searching && history[k - 1] > 1e3 * opt.residual_tolerance) || (k >= 4 && history[k - 1] > history[k - 2]) ||
         (k >= first + 7 && history[k - 1] > 1e3 * m_newton_tolerance &&
          history[k - 1] > 0.9 * std::min({history[k - 2], history[k - 3], history[k - 4]}));
     searching = searching || (opt.line_search && stalled && m_problem->drag() > 0.0);
