@@ -367,7 +367,14 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       m_normals_settled = false;
       same = true;
     }
-    same = weave || (same && m_contact->penetration_ratio(contacts, m_q) <= 1.0);
+    // Likewise they let a penetration up to twice the cap wait for the penalties they raised
+    // (which act from the next increment): on the 480-fiber biaxial test at 1 % a loading
+    // increment went through all its detection passes with an element pressed just beyond the
+    // cap, raising its penalty at each, and failed twice (200 s) before its level was cut.
+    // (Such an increment does not end its step or level either.)
+    const double deepest = weave ? 0.0 : m_contact->penetration_ratio(contacts, m_q);
+    if (lagged && deepest > 1.0) m_normals_settled = false;
+    same = weave || (same && deepest <= (lagged ? 2.0 : 1.0));
     // Pseudo-time increments lag the penalty raises like the normals: the raised penalties act
     // from the next increment (a relax step ends only once nothing is raised any more).
     if (lagged && raised > 0) m_normals_settled = false;
@@ -1130,8 +1137,8 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         // would only risk a failure (session 12's 480 relax, at a drag force of 8.3e-5, went
         // from 8.8 to 4.4 N/m and failed there after 25 iterations).
         const double fall = m_relax_settling ? 1.0 : iterations <= 12 ? 0.25 : iterations <= 30 ? 0.5 : 1.0;
-        m_relax_drag = std::max(std::max(fall * m_relax_drag, relax_min), std::min(failed_floor, relax_max));
         const double tolerance = test ? opt.test_tolerance : opt.relax_tolerance;
+        m_relax_drag = std::max(std::max(fall * m_relax_drag, relax_min), std::min(failed_floor, relax_max));
         failed_floor *= m_relax_residual > 100.0 * tolerance ? fall : 0.7;
       }
       lambda += step_dl;
