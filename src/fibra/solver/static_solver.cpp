@@ -353,31 +353,20 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     // Consistent: no new element would carry force (the new ones do not penetrate) and the
     // fresh set sees no penetration beyond the cap.
     // Pseudo-time increments (weaving, and relax and test increments whose drag force is
-    // still above the tolerance) let the fresh elements that penetrate less than the cap wait
-    // for the next increment, like the normals (the drag keeps the motion per increment
-    // small); the increments that end a relax or a test level take them in. On the 480-fiber
-    // biaxial test a level's loading increment went through all its detection passes so, the
-    // set alternating between 54 272 and 54 300 elements as a fiber slid across a crossing,
-    // and failed twice (160 s) before its level was cut.
-    bool same = true;
-    for (size_t k = 0; !weave && same && k < contacts.size(); ++k)
-      if (contacts[k].fresh) same = m_contact->penetration_ratio({contacts[k]}, m_q) <= 0.0;
-    // (Such an increment does not end its step or level: its normals count as unsettled.)
-    if (lagged && !weave && !same) {
-      m_normals_settled = false;
-      same = true;
-    }
-    // Likewise they let a penetration up to twice the cap wait for the penalties they raised
-    // (which act from the next increment): on the 480-fiber biaxial test at 1 % a loading
-    // increment went through all its detection passes with an element pressed just beyond the
-    // cap, raising its penalty at each, and failed twice (200 s) before its level was cut.
-    // (Such an increment does not end its step or level either.)
+    // still above the tolerance) let fresh elements that penetrate, and penetrations of up to
+    // twice the cap, wait for the next increment, as they let the penalties they raised wait
+    // (those act from the next increment) and the normals; such an increment does not end its
+    // step or level (a relax step ends only once nothing is raised any more), and the
+    // increments that do take everything in. On the 480-fiber biaxial test loading increments
+    // went through all their detection passes and failed twice (160-200 s), the set
+    // alternating between 54 272 and 54 300 elements as a fiber slid across a crossing, or an
+    // element pressed just beyond the cap, its penalty raised at every pass.
+    bool fresh_penetrate = false;
+    for (size_t k = 0; !weave && !fresh_penetrate && k < contacts.size(); ++k)
+      fresh_penetrate = contacts[k].fresh && !(m_contact->penetration_ratio({contacts[k]}, m_q) <= 0.0);
     const double deepest = weave ? 0.0 : m_contact->penetration_ratio(contacts, m_q);
-    if (lagged && deepest > 1.0) m_normals_settled = false;
-    same = weave || (same && deepest <= (lagged ? 2.0 : 1.0));
-    // Pseudo-time increments lag the penalty raises like the normals: the raised penalties act
-    // from the next increment (a relax step ends only once nothing is raised any more).
-    if (lagged && raised > 0) m_normals_settled = false;
+    if (lagged && (fresh_penetrate || deepest > 1.0 || raised > 0)) m_normals_settled = false;
+    const bool same = weave || ((lagged || !fresh_penetrate) && deepest <= (lagged ? 2.0 : 1.0));
     // A stalled increment ends here whatever the detection found (m_normals_settled is false:
     // the level or the relax goes on with an increment that starts from this detection).
     if ((same && (raised == 0 || lagged)) || stalled_increment) {
@@ -743,10 +732,11 @@ void StaticSolver::predict_test_level(int step, double lambda) {
   const std::vector<char>& fixed = m_problem->fixed();
   // Each edge body's motion to lambda (zero along its free components) and its centre now.
   Vec3 centre[4], motion[4];
+  Index first_dof[4];
   for (int e = 0; e < 4; ++e) {
     const int b = m_model.body_index(kEdgeBodies[e]);
     if (b < 0) return;
-    const Index d0 = m_model.bodies[b].first_dof;
+    const Index d0 = first_dof[e] = m_model.bodies[b].first_dof;
     centre[e] = before.segment<3>(d0);
     motion[e] = m_q.segment<3>(d0) - before.segment<3>(d0);
   }
@@ -757,13 +747,11 @@ void StaticSolver::predict_test_level(int step, double lambda) {
   // its offset along x since the step's start grows by the edges' motions.
   const StepSpec& st = m_case.steps[step];
   if (st.kind == StepSpec::Kind::Shear && st.free_height) {
-    const int bottom = m_model.body_index(kEdgeBodies[2]), top = m_model.body_index(kEdgeBodies[3]);
-    const Index bx = m_model.bodies[bottom].first_dof, tx = m_model.bodies[top].first_dof;
     const auto start_x = [&](Index d) {
       const auto it = m_program->disp.find(d);
       return m_model.reference[d] + (it != m_program->disp.end() ? it->second.first : 0.0);
     };
-    const double offset = (centre[3].x() - centre[2].x()) - (start_x(tx) - start_x(bx));
+    const double offset = (centre[3].x() - centre[2].x()) - (start_x(first_dof[3]) - start_x(first_dof[2]));
     const double moved = offset + motion[3].x() - motion[2].x();
     const double squared = offset * offset + ly * ly - moved * moved;
     if (squared > 0.0) motion[3].y() = std::sqrt(squared) - ly;
@@ -1137,8 +1125,8 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         // would only risk a failure (session 12's 480 relax, at a drag force of 8.3e-5, went
         // from 8.8 to 4.4 N/m and failed there after 25 iterations).
         const double fall = m_relax_settling ? 1.0 : iterations <= 12 ? 0.25 : iterations <= 30 ? 0.5 : 1.0;
-        const double tolerance = test ? opt.test_tolerance : opt.relax_tolerance;
         m_relax_drag = std::max(std::max(fall * m_relax_drag, relax_min), std::min(failed_floor, relax_max));
+        const double tolerance = test ? opt.test_tolerance : opt.relax_tolerance;
         failed_floor *= m_relax_residual > 100.0 * tolerance ? fall : 0.7;
       }
       lambda += step_dl;
