@@ -199,6 +199,7 @@ inline void expect_same_case(const Case& a, const Case& b, bool compare_fabric =
   expect_same_double(s.relax_drag, t.relax_drag, "solver.relax_drag");
   expect_same_double(s.relax_tolerance, t.relax_tolerance, "solver.relax_tolerance");
   expect_same_double(s.test_tolerance, t.test_tolerance, "solver.test_tolerance");
+  expect_same_double(s.test_inexact, t.test_inexact, "solver.test_inexact");
   expect_same_double(s.pseudo_tolerance, t.pseudo_tolerance, "solver.pseudo_tolerance");
 
   const ContactSpec& p = a.contact;
@@ -219,6 +220,7 @@ inline void expect_same_case(const Case& a, const Case& b, bool compare_fabric =
   EXPECT_EQ(a.output.every, b.output.every);
   EXPECT_EQ(a.output.tube_sides, b.output.tube_sides);
   EXPECT_EQ(a.output.plots, b.output.plots);
+  EXPECT_EQ(a.output.test_levels, b.output.test_levels);
 
   if (!compare_fabric) return;
   ASSERT_EQ(a.fabric.has_value(), b.fabric.has_value());

@@ -616,6 +616,10 @@ const std::vector<BadCase> kBadCases = {
      "expected a number in (0, 1)"},
     {"TestToleranceOne", "max_cuts = 5", "max_cuts = 5\ntest_tolerance = 1", "solver.test_tolerance",
      "expected a number in (0, 1)"},
+    {"TestInexactOne", "max_cuts = 5", "max_cuts = 5\ntest_inexact = 1", "solver.test_inexact",
+     "expected a number in [0, 1)"},
+    {"TestInexactNegative", "max_cuts = 5", "max_cuts = 5\ntest_inexact = -0.1", "solver.test_inexact",
+     "expected a number in [0, 1)"},
     {"PseudoToleranceZero", "max_cuts = 5", "max_cuts = 5\npseudo_tolerance = 0", "solver.pseudo_tolerance",
      "expected a number in (0, 1)"},
     {"LineSearchNotBool", "line_search = false", "line_search = 0", "solver.line_search",
@@ -624,6 +628,7 @@ const std::vector<BadCase> kBadCases = {
      "solver.linear_solver", "expected \"cholmod\" or \"eigen\", got \"cholmd\" (did you mean \"cholmod\"?)"},
     {"SolverArrayOfTables", "[solver]", "[[solver]]", "solver", "expected a"},
     {"EveryZero", "every = 2", "every = 0", "output.every", "must be >= 1"},
+    {"TestLevelsNotBool", "every = 2", "every = 2\ntest_levels = 1", "output.test_levels", "expected a boolean"},
     {"TubeSidesTwo", "tube_sides = 16", "tube_sides = 2", "output.tube_sides", "must be >= 3"},
 
     // Top level.

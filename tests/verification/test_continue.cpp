@@ -111,7 +111,10 @@ TEST_F(Continue, TestingFromTheRelaxedStateRepeatsTheWholeRun) {
   const RunReport r = run_case(c, options);
   ASSERT_EQ(r.result.status, RunResult::Status::Converged) << r.result.message;
   // The same curve: rows (increment, load, strains, forces, shear, contact elements,
-  // penetration) equal to the solver's tolerance.
+  // penetration) equal to the solver's tolerance. The levels' pseudo-time solves stop at a
+  // hundredth of their drag force (solver.test_inexact), where the two runs' paths can part:
+  // this run's first conjugate gradients have no factor left from the relax step. Measured:
+  // 1.6e-6 N apart on the shear force (-0.1197 N).
   const auto a = read_curves(whole / "curves_pull.csv"), b = read_curves(s_dir / "pull" / "curves_pull.csv");
   ASSERT_EQ(a.size(), b.size());
   ASSERT_EQ(a.size(), 3u);
@@ -122,7 +125,7 @@ TEST_F(Continue, TestingFromTheRelaxedStateRepeatsTheWholeRun) {
         EXPECT_TRUE(std::isnan(b[k][i]));
         continue;
       }
-      EXPECT_NEAR(b[k][i], a[k][i], 1e-6 * std::max(1.0, std::abs(a[k][i]))) << "row " << k << " column " << i;
+      EXPECT_NEAR(b[k][i], a[k][i], 1e-5 * std::max(1.0, std::abs(a[k][i]))) << "row " << k << " column " << i;
     }
   }
   // The start row carries the relaxed tension (not zero: the edges hold the fabric).
@@ -143,6 +146,16 @@ TEST_F(Continue, TestingFromTheRelaxedStateRepeatsTheWholeRun) {
   }
   EXPECT_EQ(compared, 12 * 12);  // 8 tow ends and 4 edges, 12 columns each
   EXPECT_GT(std::abs(std::stod(hp.front().at("body:edge.x+:ux"))), 1e-7);
+  // The ParaView collections: the start and each settled level (output.test_levels), not the
+  // pseudo-time increments within the levels that history.csv lists.
+  for (const char* collection : {"fibers.pvd", "contacts.pvd"}) {
+    std::ifstream in(s_dir / "pull" / collection);
+    const std::string pvd((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    size_t sets = 0;
+    for (size_t at = pvd.find("<DataSet"); at != std::string::npos; at = pvd.find("<DataSet", at + 1)) ++sets;
+    EXPECT_EQ(sets, std::string(collection) == "fibers.pvd" ? 3u : 2u) << collection;  // no contacts at the start
+  }
+  EXPECT_GT(hp.size(), 1u + 2u);  // the initial row and more increments than levels
   const nlohmann::json s = read_json(s_dir / "pull" / "summary.json");
   EXPECT_EQ(s["start"]["step"], "relax");
   EXPECT_EQ(s["states"].size(), 1u);
@@ -295,11 +308,13 @@ TEST_F(Continue, ATestGoesOnWithTheDragThatLoadedItsLastLevel) {
 // failed attempts, 894 iterations (and at 60 degrees with 6 iterations the old rule ran out of
 // increments at 0.82 where this one ends). With the normals in the cutting plane (session 18)
 // the sizes go 0.5, 0.25, 0.0625, 0.03125, 0.03125, 0.02344, 0.02344, 0.01758, 0.01758,
-// 0.02637, 0.0166: grown at least once, every ratio allowed.
+// 0.02637, 0.0166: grown at least once, every ratio allowed. The pseudo-time solves go to
+// pseudo_tolerance (test_inexact = 0): stopped at a hundredth of their drag force (the default)
+// they fit within 5 iterations and the level is cut once only, 0.5 and 0.5.
 TEST_F(Continue, TestLevelsGrowBackAfterACut) {
   ASSERT_TRUE(s_whole);
   const Case c = continued("from = \"whole\"\nstep = \"relax\"",
-                           "[solver]\nmax_iterations = 5\n[[step]]\nname = \"shear\"\nkind = \"shear\"\n"
+                           "[solver]\nmax_iterations = 5\ntest_inexact = 0\n[[step]]\nname = \"shear\"\nkind = \"shear\"\n"
                            "angle = 40\nincrements = 1\nmax_increments = 400\n");
   RunOptions options;
   options.out_dir = (s_dir / "grow").string();

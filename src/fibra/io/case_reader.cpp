@@ -1626,7 +1626,7 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   check_keys(t, path,
              {"residual_tolerance", "displacement_tolerance", "max_iterations", "max_cuts",
               "line_search", "test_predictor", "linear_solver", "ordering", "binding_tolerance", "max_binding_updates",
-              "binding_stiffness", "max_step", "weave_drag", "relax_drag", "drag_axial", "relax_tolerance", "test_tolerance", "pseudo_tolerance",
+              "binding_stiffness", "max_step", "weave_drag", "relax_drag", "drag_axial", "relax_tolerance", "test_tolerance", "test_inexact", "pseudo_tolerance",
               "krylov_iterations", "krylov_tolerance", "krylov_precision"});
   SolverSpec s;
   if (const Value* v = find(t, "residual_tolerance")) {
@@ -1675,6 +1675,13 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   }
   if (const Value* v = find(t, "test_tolerance"))
     s.test_tolerance = fraction(*v, join(path, "test_tolerance"), "the reference force");
+  if (const Value* v = find(t, "test_inexact")) {
+    const std::string key = join(path, "test_inexact");
+    s.test_inexact = to_number(*v, key);
+    if (!(s.test_inexact >= 0 && s.test_inexact < 1))
+      fail(key, fmt::format("expected a number in [0, 1) (the Newton tolerance relative to the drag force; 0 = off), got {}",
+                            s.test_inexact), v);
+  }
   if (const Value* v = find(t, "relax_tolerance")) {
     const std::string key = join(path, "relax_tolerance");
     s.relax_tolerance = to_number(*v, key);
@@ -1737,11 +1744,12 @@ ContactSpec Reader::read_contact(const Value& t, const std::string& path) const 
 
 OutputSpec Reader::read_output(const Value& t, const std::string& path) const {
   expect_table(t, path);
-  check_keys(t, path, {"every", "tube_sides", "plots"});
+  check_keys(t, path, {"every", "tube_sides", "plots", "test_levels"});
   OutputSpec o;
   if (const Value* v = find(t, "every")) o.every = to_int(*v, join(path, "every"), 1);
   if (const Value* v = find(t, "tube_sides")) o.tube_sides = to_int(*v, join(path, "tube_sides"), 3);
   if (const Value* v = find(t, "plots")) o.plots = to_bool(*v, join(path, "plots"));
+  if (const Value* v = find(t, "test_levels")) o.test_levels = to_bool(*v, join(path, "test_levels"));
   return o;
 }
 

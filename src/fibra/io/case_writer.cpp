@@ -292,6 +292,7 @@ void write_solver(std::string& out, const SolverSpec& s) {
   out += fmt::format("drag_axial = {}\n", number(s.drag_axial));
   out += fmt::format("relax_tolerance = {}\n", number(s.relax_tolerance));
   out += fmt::format("test_tolerance = {}\n", number(s.test_tolerance));
+  out += fmt::format("test_inexact = {}\n", number(s.test_inexact));
   out += fmt::format("pseudo_tolerance = {}\n", number(s.pseudo_tolerance));
   out += fmt::format("krylov_iterations = {}\n", s.krylov_iterations);
   out += fmt::format("krylov_tolerance = {}\n", number(s.krylov_tolerance));
@@ -342,6 +343,7 @@ std::string write_case_toml(const Case& c) {
   out += fmt::format("every = {}\n", c.output.every);
   out += fmt::format("tube_sides = {}\n", c.output.tube_sides);
   out += fmt::format("plots = {}\n", c.output.plots);
+  out += fmt::format("test_levels = {}\n", c.output.test_levels);
   if (out.front() == '\n') out.erase(0, 1);  // no title
   return out;
 }

@@ -221,6 +221,7 @@ struct SolverSpec {
   double drag_axial = 1e-2;               ///< weave, relax and test steps' drag: weight of a node's motion along its fiber (1: isotropic)
   double relax_tolerance = 1e-4;          ///< relax steps end when the drag's force is below this (relative)
   double test_tolerance = 1e-4;           ///< biaxial/shear: a load level is an equilibrium when the drag's force is below this (relative)
+  double test_inexact = 0.01;             ///< biaxial/shear with a drag: Newton tolerance of pseudo-time increments / the drag force they leave (0: pseudo_tolerance)
   bool test_predictor = true;             ///< biaxial/shear: each load level starts from the interior moved like the edges (interpolated)
   double pseudo_tolerance = 1e-6;         ///< Newton tolerance of pseudo-time increments (weave; relax/test while the drag force is above its tolerance)
   int krylov_iterations = 20;             ///< CG iterations preconditioned by the last factorization; 0 = factorize every iteration
@@ -251,6 +252,7 @@ struct ContactSpec {
 /// Output settings ([output] table).
 struct OutputSpec {
   int every = 1;               ///< write a .vtu every N converged increments (last always)
+  bool test_levels = true;     ///< biaxial/shear steps with a drag: .vtu at each settled level only (not every increment)
   int tube_sides = 12;         ///< polygon sides of the tube view of each fiber
   bool plots = true;           ///< plots of the biaxial and shear steps' curves (plots/, needs matplotlib)
 };

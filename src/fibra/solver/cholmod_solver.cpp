@@ -49,8 +49,12 @@ class CholmodSolver final : public LinearSolver {
       if (m_factor) cholmod_free_factor(&m_factor, &m_common);
       m_dummy.assign(m_pattern->nonzeros(), 0.0);
       cholmod_sparse pattern = wrap(m_dummy);
+      const auto t0 = std::chrono::steady_clock::now();
       m_factor = cholmod_analyze(&pattern, &m_common);
       if (!m_factor) throw std::runtime_error("CHOLMOD analysis failed");
+      if (debug_newton())
+        fmt::print(stderr, "  analysis: {:.2f} s, {:.4g} factor nonzeros\n",
+                   std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), m_common.lnz);
       m_flops = m_common.fl;
       m_pending = false;
     }

@@ -204,6 +204,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   m_contact_stats = ContactStats{};
   m_binding_updates = 0;
   m_newton_tolerance = m_case.solver.residual_tolerance;
+  m_tolerance_scale = 1.0;
   if (!m_contact) return equilibrium(history, iterations, residual);
   const bool weave = m_case.steps[step].kind == StepSpec::Kind::Weave;
   // Weaving is a pseudo-time process: a drag towards the increment's start (stiffness per
@@ -292,6 +293,27 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     // correction at the displacement tolerance scaled alike).
     m_newton_tolerance = lagged ? std::max(m_case.solver.pseudo_tolerance, m_case.solver.residual_tolerance)
                                 : m_case.solver.residual_tolerance;
+    // Tests (biaxial, shear) with a drag: each solve only as exact as the state it is part of.
+    // A lagged increment is a step of a proximal-point sequence whose drag force, relative to
+    // the reference force, was 0.19, 0.13, 0.028, 0.0082, ... on the 480-fiber equibiaxial
+    // test: a Newton residual a hundredth of the drag force the increment is expected to leave
+    // (the last increment's, or the last level's loading increment's for a level's first)
+    // changes nothing of the sequence, where 1e-6 took 6-14 iterations per solve
+    // (solver.test_inexact). The settling increments, whose states are the curves' points,
+    // keep residual_tolerance.
+    // The bindings' tolerance (a length) is scaled alike: the proximal anchors' springs are
+    // reset whenever a member moved more than it, and a solve that stops at the first iteration
+    // moves nothing, so with the length left as it was the multipliers grew by one update at a
+    // time, each solve stopping at once, until max_binding_updates failed the increment.
+    m_tolerance_scale = 1.0;
+    if (lagged && relax && m_relax_drag > 0.0 && m_case.steps[step].is_test()) {
+      const double expected = m_loading ? m_load_residual : m_relax_residual;
+      const double loose = m_case.solver.test_inexact * expected;
+      if (loose > m_newton_tolerance) {
+        m_tolerance_scale = loose / m_newton_tolerance;
+        m_newton_tolerance = loose;
+      }
+    }
     for (int k = 0; k < spec.max_normal_updates; ++k) {
       int its = 0;
       if (!equilibrium(history, its, residual)) {
@@ -367,6 +389,13 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     const double deepest = weave ? 0.0 : m_contact->penetration_ratio(contacts, m_q);
     if (lagged && (fresh_penetrate || deepest > 1.0 || raised > 0)) m_normals_settled = false;
     const bool same = weave || ((lagged || !fresh_penetrate) && deepest <= (lagged ? 2.0 : 1.0));
+    if (debug_newton() && !weave) {
+      size_t fresh = 0;
+      for (const ContactElement& c : contacts) fresh += c.fresh ? 1 : 0;
+      fmt::print(stderr, " detection: {} elements ({} fresh{}), deepest {:.3f} of the cap, {} penalties raised{}\n",
+                 contacts.size(), fresh, fresh_penetrate ? ", some penetrating" : "", deepest, raised,
+                 same && (raised == 0 || lagged) ? "" : ": another pass");
+    }
     // A stalled increment ends here whatever the detection found (m_normals_settled is false:
     // the level or the relax goes on with an increment that starts from this detection).
     if ((same && (raised == 0 || lagged)) || stalled_increment) {
@@ -415,7 +444,7 @@ double StaticSolver::normal_update_residual() {
 
 bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, double& residual) {
   iterations = 0;
-  const double tolerance = m_case.solver.binding_tolerance * m_model.length_scale;
+  const double tolerance = m_case.solver.binding_tolerance * m_model.length_scale * m_tolerance_scale;
   if (m_bodies) m_bodies->set_anchors(m_q);
   for (int update = 0;; ++update) {
     int its = 0;
@@ -554,6 +583,9 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
           m_force_scale, opt.krylov_tolerance, opt.krylov_iterations, m_pcg);
       m_stats.krylov_iterations += cg.iterations;
       solved = cg.converged;
+      if (debug_newton())
+        fmt::print(stderr, "  it {:2d} conjugate gradients: {} iterations, {} ({:.2f} s)\n", iterations, cg.iterations,
+                   cg.converged ? "converged" : cg.breakdown ? "broke down" : "not converged", seconds_since(t0));
       if (solved) ++m_stats.reused_factorizations;
       // A slow solve: the factor has aged, the next iteration makes a new one.
       m_reuse_factor = solved && 2 * cg.iterations <= opt.krylov_iterations;
@@ -573,6 +605,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
         ++m_stats.regularized_factorizations;
       }
       m_stats.time_factorization += seconds_since(t0);
+      if (debug_newton()) fmt::print(stderr, "  it {:2d} factorized ({:.2f} s)\n", iterations, seconds_since(t0));
       m_stats.factor_nonzeros = m_linear->factor_nonzeros();
       if (st != FactorStatus::Ok) return false;
       if (shift > 0.0 && debug_newton() && !spectra_printed) {
@@ -1052,6 +1085,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       std::vector<double> history;
       int iterations = 0;
       double residual = 0.0;
+      m_loading = test && step_dl > 0.0;
       const bool ok = solve_increment(step, lambda + step_dl, history, iterations, residual);
       ++attempts;
       if (interrupt_flag().load()) {
@@ -1111,6 +1145,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         // Drag force left at the end of the increment (scaled like the residual), relative to
         // the reference force.
         m_relax_residual = m_problem->drag_force_norm(m_q, m_force_scale) / std::max(m_reference_force, 1e-300);
+        if (m_loading) m_load_residual = m_relax_residual;
         const bool loaded = lambda + step_dl >= 1.0 - 1e-12;
         if (test) {
           level_settled = m_relax_residual <= opt.test_tolerance && m_normals_settled;

@@ -160,7 +160,10 @@ class StaticSolver {
   bool m_relax_settling = false;  // relax steps: the drag is negligible, normals iterated to their fixed point
   double m_reference_force = 0;  // reference force of the last Newton iteration [N]
   double m_newton_tolerance = 0;  // residual tolerance of the current Newton solves (relative; >= residual_tolerance)
+  double m_tolerance_scale = 1;   // the current Newton tolerance over the step's own (pseudo_ or residual_tolerance)
   double m_relax_residual = 0;   // relax steps: drag force at the end of the last increment, relative
+  double m_load_residual = 0;    // tests: drag force at the end of the last level's loading increment (0: none yet)
+  bool m_loading = false;        // tests: the increment being solved moves the edges (a level's first)
   SolverStats m_stats;
   std::function<void(const std::string&)> m_progress;
 };
