@@ -219,11 +219,16 @@ TEST(Weaving, TwillSectionsTurnAtTheEndsOfFloatsPlainSectionsStayLevel) {
 //    weft alike within 15 %.
 const std::string kPlainFriction = test::plain_friction_sample();
 
+/// The friction sample with a [solver] table of these keys (one per line) and these steps after it.
+std::string plain_friction_with_solver(const std::string& keys, const std::string& steps = "") {
+  std::string text = kPlainFriction + steps;
+  text.replace(text.find("[contact]"), 9, "[solver]\n" + keys + "[contact]");
+  return text;
+}
+
 TEST(Weaving, PlainWeaveWithFrictionRelaxesToEquilibrium) {
   // This test holds the relaxed state to 1e-6 (the default relax_tolerance is 1e-4).
-  std::string text = kPlainFriction;
-  text.replace(text.find("[contact]"), 9, "[solver]\nrelax_tolerance = 1e-6\n[contact]");
-  const test::Solved s = test::solve_toml(text, "plain_friction.toml");
+  const test::Solved s = test::solve_toml(plain_friction_with_solver("relax_tolerance = 1e-6\n"), "plain_friction.toml");
   ASSERT_TRUE(s.converged()) << s.result.message;
   ASSERT_EQ(s.step_end_info.size(), 2u);
   const IncrementInfo& woven = s.step_end_info[0];
@@ -359,6 +364,10 @@ Vec3 edge_force_sum(const IncrementInfo& info, const Edges& e) {
 test::Solved woven_then(const std::string& step) {
   return test::solve_toml(kPlainFriction + step, "tested.toml");
 }
+// Two load levels of an equibiaxial pull of 0.4 % and of a shear of 4 degrees, for the tests
+// that compare a solver setting on and off.
+const std::string kPullInTwo = "[[step]]\nname = \"pull\"\nkind = \"biaxial\"\nstrain = 0.004\nratio = 1\nincrements = 2\n";
+const std::string kShearInTwo = "[[step]]\nname = \"shear\"\nkind = \"shear\"\nangle = 4\nincrements = 2\n";
 
 // Biaxial, ratio 0.5: the warp edges move apart by 0.4 % of their distance at the step's start
 // (not at the flat start) and the weft ones by half that; at both levels the four edge forces
@@ -478,18 +487,18 @@ TEST(FabricTests, BiaxialCurveIsJShaped) {
 // an equilibrium of its own friction history all the same. Here an equibiaxial pull of 0.4 %
 // and a shear of 4 degrees, each in two levels, with and without it: the levels' first
 // increments take fewer Newton iterations, and the settled edge forces differ by the
-// path-dependence of friction only. Measured: biaxial 15 iterations against 16, x+ forces
-// 9.610 / 9.565 and 16.35 / 16.25 N; shear 12 against 35 (36 with two BLAS threads; 43 when
-// the lateral edges, free to turn, took the field's translation only and not its turn; 19 with
-// the turn linearized), top-edge forces 0.1442 / 0.1436 and 0.5654 / 0.5648 N (ctest's single-threaded BLAS).
+// path-dependence of friction only. Measured (with solver.test_inexact, session 21): biaxial 10
+// iterations against 13, x+ forces 9.6326 / 9.584 and 16.388 / 16.298 N; shear 8 against 26,
+// top-edge forces 0.13771 / 0.13744 and 0.5556 / 0.55523 N (ctest's single-threaded BLAS).
+// Before it: biaxial 15 against 16, shear 12 against 35 (43 when the lateral edges, free to
+// turn, took the field's translation only and not its turn; 19 with the turn linearized).
 TEST(FabricTests, LevelPredictorSavesIterationsNotTheCurve) {
   struct Run {
     int first_iterations = 0;    // over the levels' first increments
     std::vector<double> forces;  // the driven edge's force at each settled level
   };
   auto run = [](const std::string& step, bool predictor, bool pull) {
-    std::string text = kPlainFriction + step;
-    if (!predictor) text.replace(text.find("[contact]"), 9, "[solver]\ntest_predictor = false\n[contact]");
+    const std::string text = predictor ? kPlainFriction + step : plain_friction_with_solver("test_predictor = false\n", step);
     const test::Solved s = test::solve_toml(text, predictor ? "predicted.toml" : "unpredicted.toml");
     EXPECT_TRUE(s.converged()) << s.result.message;
     Run r;
@@ -503,10 +512,8 @@ TEST(FabricTests, LevelPredictorSavesIterationsNotTheCurve) {
     }
     return r;
   };
-  const std::string biaxial = "[[step]]\nname = \"pull\"\nkind = \"biaxial\"\nstrain = 0.004\nratio = 1\nincrements = 2\n";
-  const std::string shear = "[[step]]\nname = \"shear\"\nkind = \"shear\"\nangle = 4\nincrements = 2\n";
   for (const bool pull : {true, false}) {
-    const std::string& step = pull ? biaxial : shear;
+    const std::string& step = pull ? kPullInTwo : kShearInTwo;
     const Run with = run(step, true, pull), without = run(step, false, pull);
     std::printf("%s: first increments' Newton iterations %d with the predictor, %d without; forces", pull ? "biaxial" : "shear",
                 with.first_iterations, without.first_iterations);
@@ -534,8 +541,7 @@ TEST(FabricTests, InexactTestSolvesSaveIterationsNotTheCurve) {
     std::vector<double> forces;  // the driven edge's force at each settled level
   };
   auto run = [](const std::string& step, double inexact, bool pull) {
-    std::string text = kPlainFriction + step;
-    text.replace(text.find("[contact]"), 9, fmt::format("[solver]\ntest_inexact = {}\n[contact]", inexact));
+    const std::string text = plain_friction_with_solver(fmt::format("test_inexact = {}\n", inexact), step);
     const test::Solved s = test::solve_toml(text, inexact > 0 ? "inexact.toml" : "exact.toml");
     EXPECT_TRUE(s.converged()) << s.result.message;
     Run r;
@@ -552,10 +558,8 @@ TEST(FabricTests, InexactTestSolvesSaveIterationsNotTheCurve) {
     }
     return r;
   };
-  const std::string biaxial = "[[step]]\nname = \"pull\"\nkind = \"biaxial\"\nstrain = 0.004\nratio = 1\nincrements = 2\n";
-  const std::string shear = "[[step]]\nname = \"shear\"\nkind = \"shear\"\nangle = 4\nincrements = 2\n";
   for (const bool pull : {true, false}) {
-    const std::string& step = pull ? biaxial : shear;
+    const std::string& step = pull ? kPullInTwo : kShearInTwo;
     const Run inexact = run(step, 0.01, pull), exact = run(step, 0.0, pull);
     std::printf("%s: Newton iterations %d inexact, %d exact; forces", pull ? "biaxial" : "shear", inexact.iterations,
                 exact.iterations);
