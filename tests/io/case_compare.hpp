@@ -200,6 +200,7 @@ inline void expect_same_case(const Case& a, const Case& b, bool compare_fabric =
   expect_same_double(s.relax_tolerance, t.relax_tolerance, "solver.relax_tolerance");
   expect_same_double(s.test_tolerance, t.test_tolerance, "solver.test_tolerance");
   expect_same_double(s.test_inexact, t.test_inexact, "solver.test_inexact");
+  expect_same_double(s.test_penetration_slack, t.test_penetration_slack, "solver.test_penetration_slack");
   expect_same_double(s.pseudo_tolerance, t.pseudo_tolerance, "solver.pseudo_tolerance");
 
   const ContactSpec& p = a.contact;

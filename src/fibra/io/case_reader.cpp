@@ -1626,7 +1626,7 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   check_keys(t, path,
              {"residual_tolerance", "displacement_tolerance", "max_iterations", "max_cuts",
               "line_search", "test_predictor", "linear_solver", "ordering", "binding_tolerance", "max_binding_updates",
-              "binding_stiffness", "max_step", "weave_drag", "relax_drag", "drag_axial", "relax_tolerance", "test_tolerance", "test_inexact", "pseudo_tolerance",
+              "binding_stiffness", "max_step", "weave_drag", "relax_drag", "drag_axial", "relax_tolerance", "test_tolerance", "test_inexact", "test_penetration_slack", "pseudo_tolerance",
               "krylov_iterations", "krylov_tolerance", "krylov_precision"});
   SolverSpec s;
   if (const Value* v = find(t, "residual_tolerance")) {
@@ -1681,6 +1681,13 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
     if (!(s.test_inexact >= 0 && s.test_inexact < 1))
       fail(key, fmt::format("expected a number in [0, 1) (the Newton tolerance relative to the drag force; 0 = off), got {}",
                             s.test_inexact), v);
+  }
+  if (const Value* v = find(t, "test_penetration_slack")) {
+    const std::string key = join(path, "test_penetration_slack");
+    s.test_penetration_slack = to_number(*v, key);
+    if (!(s.test_penetration_slack >= 0 && s.test_penetration_slack < 1))
+      fail(key, fmt::format("expected a number in [0, 1) (the fraction by which a settled level's deepest penetration may "
+                            "exceed contact.max_penetration), got {}", s.test_penetration_slack), v);
   }
   if (const Value* v = find(t, "relax_tolerance")) {
     const std::string key = join(path, "relax_tolerance");

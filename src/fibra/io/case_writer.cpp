@@ -293,6 +293,7 @@ void write_solver(std::string& out, const SolverSpec& s) {
   out += fmt::format("relax_tolerance = {}\n", number(s.relax_tolerance));
   out += fmt::format("test_tolerance = {}\n", number(s.test_tolerance));
   out += fmt::format("test_inexact = {}\n", number(s.test_inexact));
+  out += fmt::format("test_penetration_slack = {}\n", number(s.test_penetration_slack));
   out += fmt::format("pseudo_tolerance = {}\n", number(s.pseudo_tolerance));
   out += fmt::format("krylov_iterations = {}\n", s.krylov_iterations);
   out += fmt::format("krylov_tolerance = {}\n", number(s.krylov_tolerance));

@@ -221,7 +221,8 @@ struct SolverSpec {
   double drag_axial = 1e-2;               ///< weave, relax and test steps' drag: weight of a node's motion along its fiber (1: isotropic)
   double relax_tolerance = 1e-4;          ///< relax steps end when the drag's force is below this (relative)
   double test_tolerance = 1e-4;           ///< biaxial/shear: a load level is an equilibrium when the drag's force is below this (relative)
-  double test_inexact = 0.01;             ///< biaxial/shear with a drag: Newton tolerance of pseudo-time increments / the drag force they leave (0: pseudo_tolerance)
+  double test_inexact = 0.01;             ///< biaxial/shear with a drag: Newton tolerance of pseudo-time increments / the drag force they leave, of settling ones / test_tolerance (0: off)
+  double test_penetration_slack = 0.05;   ///< biaxial/shear with a drag: a settled level's deepest penetration may exceed the cap by this fraction (raises wait for the next increment)
   bool test_predictor = true;             ///< biaxial/shear: each load level starts from the interior moved like the edges (interpolated)
   double pseudo_tolerance = 1e-6;         ///< Newton tolerance of pseudo-time increments (weave; relax/test while the drag force is above its tolerance)
   int krylov_iterations = 20;             ///< CG iterations preconditioned by the last factorization; 0 = factorize every iteration

@@ -155,6 +155,8 @@ class StaticSolver {
   double m_test_drag = 0;        // drag that applied the last test level, of this run or its start's [N/m]
   bool m_normals_settled = true;  // the last increment's normals and friction cones were a fixed point
   bool m_reuse_factor = false;    // the last factorization may precondition the next Newton solve
+  int m_cg_excess = 0;            // CG iterations since the last factorization beyond the first solve's, summed
+  int m_fresh_cg = -1;            // iterations of the first CG solve after the last factorization (-1: none yet)
   VecX m_rhs;                     // right-hand side of the Newton solve
   PcgWorkspace m_pcg;             // conjugate gradients' work vectors
   bool m_relax_settling = false;  // relax steps: the drag is negligible, normals iterated to their fixed point
