@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <numbers>
 #include <string>
@@ -527,6 +528,32 @@ TEST(FabricTests, LevelPredictorSavesIterationsNotTheCurve) {
   }
 }
 
+// The friction sample with these [solver] keys, then the test `step` (kPullInTwo or
+// kShearInTwo): Newton iterations and detection passes over the test step's increments, and
+// the driven edge's force at each settled level (x+ for the pull, the shear's top edge along
+// x). `check` sees every settled increment, with the run.
+struct TestStepRun {
+  int iterations = 0, detections = 0;
+  std::vector<double> forces;
+};
+TestStepRun run_test_step(const std::string& keys, const std::string& step, bool pull, const std::string& file,
+                          const std::function<void(const test::Solved&, const IncrementInfo&, const Edges&, int driven)>& check) {
+  const test::Solved s = test::solve_toml(plain_friction_with_solver(keys, step), file);
+  EXPECT_TRUE(s.converged()) << s.result.message;
+  TestStepRun r;
+  const Edges e = edges_of(s);
+  const int driven = pull ? e.xp : e.yp;
+  for (const IncrementInfo& i : s.increments) {
+    if (i.step == "relax" || i.step == "weave") continue;
+    r.iterations += i.iterations;
+    r.detections += i.contact.detections;
+    if (!i.settled) continue;
+    r.forces.push_back(i.bodies[driven].force.x());
+    check(s, i, e, driven);
+  }
+  return r;
+}
+
 // The Newton solves of a test level are only as exact as the state they are part of
 // (solver.test_inexact, 0.01 by default): a pseudo-time increment to a hundredth of the drag
 // force it is expected to leave, a settling one to a hundredth of test_tolerance; with 0 to
@@ -537,31 +564,18 @@ TEST(FabricTests, LevelPredictorSavesIterationsNotTheCurve) {
 // iterations against 51, x+ forces 9.6326 / 9.6326 and 16.388 / 16.388 N; shear 46 against
 // 66, top-edge forces 0.13771 / 0.13771 and 0.5556 / 0.55569 N.
 TEST(FabricTests, InexactTestSolvesSaveIterationsNotTheCurve) {
-  struct Run {
-    int iterations = 0;          // over the test step's increments
-    std::vector<double> forces;  // the driven edge's force at each settled level
-  };
   auto run = [](const std::string& step, double inexact, bool pull) {
-    const std::string text = plain_friction_with_solver(fmt::format("test_inexact = {}\n", inexact), step);
-    const test::Solved s = test::solve_toml(text, inexact > 0 ? "inexact.toml" : "exact.toml");
-    EXPECT_TRUE(s.converged()) << s.result.message;
-    Run r;
-    const Edges e = edges_of(s);
-    const int driven = pull ? e.xp : e.yp;  // the shear's top edge, along x
-    for (const IncrementInfo& i : s.increments) {
-      if (i.step == "relax" || i.step == "weave") continue;
-      r.iterations += i.iterations;
-      if (!i.settled) continue;
-      r.forces.push_back(i.bodies[driven].force.x());
-      // An equilibrium without drag to the test tolerance: the edge forces balance.
-      EXPECT_LT(edge_force_sum(i, e).norm(), 1e-3 * std::abs(i.bodies[e.xp].force.x()) + 1e-3 * std::abs(i.bodies[driven].force.x()))
-          << "inexact " << inexact << ", load factor " << i.load_factor;
-    }
-    return r;
+    return run_test_step(fmt::format("test_inexact = {}\n", inexact), step, pull, inexact > 0 ? "inexact.toml" : "exact.toml",
+                         [inexact](const test::Solved&, const IncrementInfo& i, const Edges& e, int driven) {
+                           // An equilibrium without drag to the test tolerance: the edge forces balance.
+                           EXPECT_LT(edge_force_sum(i, e).norm(), 1e-3 * std::abs(i.bodies[e.xp].force.x()) +
+                                                                      1e-3 * std::abs(i.bodies[driven].force.x()))
+                               << "inexact " << inexact << ", load factor " << i.load_factor;
+                         });
   };
   for (const bool pull : {true, false}) {
     const std::string& step = pull ? kPullInTwo : kShearInTwo;
-    const Run inexact = run(step, 0.01, pull), exact = run(step, 0.0, pull);
+    const TestStepRun inexact = run(step, 0.01, pull), exact = run(step, 0.0, pull);
     std::printf("%s: Newton iterations %d inexact, %d exact; forces", pull ? "biaxial" : "shear", inexact.iterations,
                 exact.iterations);
     for (size_t k = 0; k < inexact.forces.size() && k < exact.forces.size(); ++k)
@@ -583,32 +597,17 @@ TEST(FabricTests, InexactTestSolvesSaveIterationsNotTheCurve) {
 // settling increment raised a penalty (nor with max_penetration 0.03 and a pull of 2 % or a
 // shear of 10 degrees): measured 26 and 34 passes, 36 and 46 Newton iterations either way.
 TEST(FabricTests, PenetrationSlackSavesPassesNotTheCurve) {
-  struct Run {
-    int iterations = 0, detections = 0;  // over the test step's increments
-    std::vector<double> forces;          // the driven edge's force at each settled level
-  };
   auto run = [](const std::string& step, double slack, bool pull) {
-    const std::string text = plain_friction_with_solver(fmt::format("test_penetration_slack = {}\n", slack), step);
-    const test::Solved s = test::solve_toml(text, slack > 0 ? "slack.toml" : "cap.toml");
-    EXPECT_TRUE(s.converged()) << s.result.message;
-    Run r;
-    const Edges e = edges_of(s);
-    const int driven = pull ? e.xp : e.yp;
-    const double cap = s.c.contact.max_penetration;
-    for (const IncrementInfo& i : s.increments) {
-      if (i.step == "relax" || i.step == "weave") continue;
-      r.iterations += i.iterations;
-      r.detections += i.contact.detections;
-      if (!i.settled) continue;
-      r.forces.push_back(i.bodies[driven].force.x());
-      EXPECT_LE(i.contact.max_penetration_ratio, (1.0 + slack) * cap * (1.0 + 1e-9))
-          << "slack " << slack << ", load factor " << i.load_factor;
-    }
-    return r;
+    return run_test_step(fmt::format("test_penetration_slack = {}\n", slack), step, pull, slack > 0 ? "slack.toml" : "cap.toml",
+                         [slack](const test::Solved& s, const IncrementInfo& i, const Edges&, int) {
+                           const double cap = s.c.contact.max_penetration;
+                           EXPECT_LE(i.contact.max_penetration_ratio, (1.0 + slack) * cap * (1.0 + 1e-9))
+                               << "slack " << slack << ", load factor " << i.load_factor;
+                         });
   };
   for (const bool pull : {true, false}) {
     const std::string& step = pull ? kPullInTwo : kShearInTwo;
-    const Run slack = run(step, 0.05, pull), exact = run(step, 0.0, pull);
+    const TestStepRun slack = run(step, 0.05, pull), exact = run(step, 0.0, pull);
     std::printf("%s: detection passes %d with the slack, %d without; Newton iterations %d, %d; forces",
                 pull ? "biaxial" : "shear", slack.detections, exact.detections, slack.iterations, exact.iterations);
     for (size_t k = 0; k < slack.forces.size() && k < exact.forces.size(); ++k)

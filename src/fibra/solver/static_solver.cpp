@@ -420,10 +420,8 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
           if (r > worst_ratio) worst_ratio = r, worst = k;
         }
         auto where = [this](Index element) {
-          for (const Fiber& f : m_model.fibers)
-            if (element >= f.first_element && element < f.first_element + f.num_elements)
-              return fmt::format("{} element {}", f.name, element - f.first_element);
-          return fmt::format("element {}", element);
+          const Fiber& f = m_model.fibers[m_model.elements[element].fiber];
+          return fmt::format("{} element {}", f.name, element - f.first_element);
         };
         if (worst_ratio > 0.0) {
           const ContactElement& c = contacts[worst];
@@ -626,10 +624,9 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
           m_force_scale, opt.krylov_tolerance, opt.krylov_iterations, m_pcg);
       m_stats.krylov_iterations += cg.iterations;
       solved = cg.converged;
-      const double cg_seconds = seconds_since(t0);
       if (debug_newton())
         fmt::print(stderr, "  it {:2d} conjugate gradients: {} iterations, {} ({:.2f} s)\n", iterations, cg.iterations,
-                   cg.converged ? "converged" : cg.breakdown ? "broke down" : "not converged", cg_seconds);
+                   cg.converged ? "converged" : cg.breakdown ? "broke down" : "not converged", seconds_since(t0));
       if (solved) ++m_stats.reused_factorizations;
       // A slow solve (more than half of krylov_iterations): the factor has aged, the next
       // iteration makes a new one. So also once the solves since the last factorization took,
