@@ -67,5 +67,3 @@ void BM_BeamEnergy(benchmark::State& state) { BM_BeamElement<false, false>(state
 BENCHMARK(BM_BeamEnergyGradHess);
 BENCHMARK(BM_BeamEnergyGrad);
 BENCHMARK(BM_BeamEnergy);
-
-BENCHMARK_MAIN();

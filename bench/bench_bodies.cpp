@@ -448,5 +448,3 @@ void BM_FabricFactorize(benchmark::State& state) {
 BENCHMARK(BM_FabricFactorize)->Arg(0)->Arg(1)->ArgName("bindings")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
-
-BENCHMARK_MAIN();

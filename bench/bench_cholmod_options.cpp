@@ -248,5 +248,3 @@ FIBRA_ORDERING(metis, Metis);
 FIBRA_ORDERING(amd, Amd);
 FIBRA_ORDERING(natural, Natural);
 FIBRA_ORDERING(default, Default);
-
-BENCHMARK_MAIN();

@@ -119,5 +119,3 @@ void BM_UpdateNormals(benchmark::State& state) {
 BENCHMARK(BM_UpdateNormals)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
-
-BENCHMARK_MAIN();

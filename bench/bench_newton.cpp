@@ -311,5 +311,3 @@ void BM_EigenSolve(benchmark::State& state) {
 BENCHMARK(BM_EigenSolve)->ArgName("fibers")->Arg(kFibers)->UseRealTime()->Unit(benchmark::kMillisecond);
 
 }  // namespace
-
-BENCHMARK_MAIN();

@@ -1,12 +1,10 @@
 // fibra: command-line program. Parses arguments, validates the case, runs it, reports;
 // writes the generated assembly of a case (generate), slices of a run's result (slice) and
 // plots of the loading curves of one or several runs (plot).
-#include <malloc.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <charconv>
-#include <climits>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -17,6 +15,7 @@
 
 #include "fibra/body/bodies.hpp"
 #include "fibra/core/error.hpp"
+#include "fibra/core/heap.hpp"
 #include "fibra/io/case_reader.hpp"
 #include "fibra/io/case_writer.hpp"
 #include "fibra/io/curve_plots.hpp"
@@ -288,23 +287,6 @@ int plot(const std::vector<std::string>& dirs, const std::string& out) {
   return 0;
 }
 
-/// Large blocks freed by the solver are kept for the next request instead of going back to the
-/// system. Each factorization and each new contact pattern allocates and frees blocks of tens
-/// to hundreds of MB (CHOLMOD's permuted copy of the matrix, the Hessian's values); glibc maps
-/// blocks above 128 kB to fresh pages and unmaps them on free, so every such block was zeroed
-/// by the kernel page by page again: 22 M page faults and 538 s of system time in a 40-minute
-/// 480-fiber weave and relax. Blocks of up to 2 GB now come from the heap, which keeps its
-/// freed memory (3 x 3 x 16 weave + relax: factorizations 24.3 -> 17.4 s, peak memory 337 ->
-/// 377 MB; docs/performance.md, session 19). Left alone when the user tunes malloc.
-void keep_freed_memory() {
-  for (const char* tuned : {"GLIBC_TUNABLES", "MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_", "MALLOC_TOP_PAD_",
-                            "MALLOC_MMAP_MAX_"})
-    if (std::getenv(tuned)) return;
-  mallopt(M_MMAP_THRESHOLD, INT_MAX);  // mallopt takes an int: blocks of up to 2 GB
-  mallopt(M_TRIM_THRESHOLD, INT_MAX);
-  mallopt(M_TOP_PAD, 256 << 20);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -326,7 +308,7 @@ int main(int argc, char** argv) {
     execv("/proc/self/exe", argv);
   }
   if (std::getenv("FIBRA_ADAPTIVE_BLAS_THREADS")) fibra::set_adaptive_blas_threads(true);
-  keep_freed_memory();
+  fibra::keep_freed_memory();  // large freed blocks stay in the heap (fibra/core/heap.hpp)
   CLI::App app{"fibra: woven fabrics and fiber assemblies simulated at the scale of their fibers"};
   app.require_subcommand(1);
   std::string case_path, out;
