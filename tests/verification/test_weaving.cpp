@@ -401,6 +401,40 @@ TEST(FabricTests, BiaxialPullsFromTheWovenState) {
   EXPECT_GT(end.bodies[e.xp].force.x(), end.bodies[e.yp].force.y());  // the warp pulled twice as far
 }
 
+// Equibiaxial to 2 %: each pair of edges moves apart by half the elongation each way, so the
+// fabric's centre stays where it is, and the held components of the edges (along the other
+// axis) take almost no force. With one edge of each pair held and the other moved by the whole
+// elongation (up to session 23) the fabric's middle moved along x by strain x Lx / 2 while the
+// weft edges held their tow ends' mean: the wefts were bent in the plane and the top edge took
+// -0.65 and -2.01 N across at 1 and 2 % (2.8 % of the warp force), the warp force 72.9 N at
+// 2 % instead of 70.7 N. Measured now: -0.07 and -0.13 N (0.18 %).
+TEST(FabricTests, EquibiaxialPullMovesBothEdgesAndLeavesNoForceAcross) {
+  const test::Solved s =
+      woven_then("[[step]]\nname = \"pull\"\nkind = \"biaxial\"\nstrain = 0.02\nratio = 1\nincrements = 2\n");
+  ASSERT_TRUE(s.converged()) << s.result.message;
+  ASSERT_EQ(s.step_end_info.size(), 3u);
+  const Edges e = edges_of(s);
+  const IncrementInfo& start = s.step_end_info[1];
+  const IncrementInfo& end = s.step_end_info[2];
+  const double lx = start.bodies[e.xp].center.x() - start.bodies[e.xm].center.x();
+  const double ly = start.bodies[e.yp].center.y() - start.bodies[e.ym].center.y();
+  EXPECT_NEAR(end.bodies[e.xm].center.x() - start.bodies[e.xm].center.x(), -0.01 * lx, 1e-9 * lx);
+  EXPECT_NEAR(end.bodies[e.xp].center.x() - start.bodies[e.xp].center.x(), 0.01 * lx, 1e-9 * lx);
+  EXPECT_NEAR(end.bodies[e.ym].center.y() - start.bodies[e.ym].center.y(), -0.01 * ly, 1e-9 * ly);
+  EXPECT_NEAR(end.bodies[e.yp].center.y() - start.bodies[e.yp].center.y(), 0.01 * ly, 1e-9 * ly);
+  int levels = 0;
+  for (const IncrementInfo& i : s.increments) {
+    if (i.step != "pull" || !i.settled) continue;
+    ++levels;
+    const double warp = i.bodies[e.xp].force.x(), across = i.bodies[e.yp].force.x();
+    std::printf("equibiaxial, load factor %.2f: warp force %.4g N, top edge's force across %.3e N\n", i.load_factor,
+                warp, across);
+    EXPECT_LT(std::abs(across), 0.005 * warp) << "load factor " << i.load_factor;
+    EXPECT_LT(std::abs(i.bodies[e.xp].force.y()), 0.005 * warp) << "load factor " << i.load_factor;
+  }
+  EXPECT_EQ(levels, 2);
+}
+
 // Uniaxial (ratio 0): the weft edges stay free along the weft and keep the weaving's tension
 // (0.5 N per fiber, 3 N), while the warp is pulled by 0.4 %: the warp straightens, the weft
 // crimps more and its edges draw in (measured -0.19 %); the warp carries less than with the

@@ -770,13 +770,24 @@ void StaticSolver::test_conditions(int step, std::map<Index, std::pair<double, d
   }
   const double lx = centre(1).x() - centre(0).x(), ly = centre(3).y() - centre(2).y();
   if (st.kind == StepSpec::Kind::Biaxial) {
-    // Warp edges pulled apart by strain x their distance; the weft ones by ratio x that
-    // strain x theirs, or free along the weft (ratio 0: uniaxial, the weft keeps its load).
-    disp[dof(1, 0)].second = u(1, 0) + st.strain * lx;
-    if (st.ratio > 0.0)
-      disp[dof(3, 1)].second = u(3, 1) + st.ratio * st.strain * ly;
-    else
+    // Warp edges pulled apart by strain x their distance, each by half of it, so that the
+    // fabric's centre stays where it is; the weft ones likewise by ratio x that strain x
+    // theirs, or the y+ edge free along the weft (ratio 0: uniaxial, the weft keeps its load).
+    // Moving one edge of each pair by the whole elongation (the other held) carried the
+    // fabric's middle along x by strain x lx / 2 while the edges across held their tow ends'
+    // mean where it was: the tows across were bent in the plane and the held edges took a
+    // tangential force that grew with the load (29 N, 6.5 % of the axial force, at 2 % on the
+    // 480-fiber plain weave; docs/theory/fabric.md, "Biaxial tension").
+    const double ex = 0.5 * st.strain * lx;
+    disp[dof(0, 0)].second = u(0, 0) - ex;
+    disp[dof(1, 0)].second = u(1, 0) + ex;
+    if (st.ratio > 0.0) {
+      const double ey = 0.5 * st.ratio * st.strain * ly;
+      disp[dof(2, 1)].second = u(2, 1) - ey;
+      disp[dof(3, 1)].second = u(3, 1) + ey;
+    } else {
       disp.erase(dof(3, 1));
+    }
     return;
   }
   // Shear: the y- and y+ edges (bottom and top) moved in opposite senses along x; the lateral
