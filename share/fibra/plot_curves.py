@@ -25,6 +25,7 @@ import json
 import math
 import os
 import sys
+import textwrap
 
 # What a figure of each step kind draws: per series the curves_STEP.csv columns for x and y,
 # the scale that turns the column into the plotted unit, and the direction's name.
@@ -139,7 +140,8 @@ def draw(plt, figure, series):
         ax.plot(s["x"], s["y"], linestyle=style, marker=marker, markersize=4, color=colour, label=s["label"])
     ax.set_xlabel(f"{spec['x']['quantity']} [{spec['x']['unit']}]")
     ax.set_ylabel(f"{spec['y']['quantity']} [{spec['y']['unit']}]")
-    ax.set_title(figure["title"], fontsize=11)
+    # Long titles (an overlay names every run) wrap instead of running off the figure.
+    ax.set_title("\n".join(textwrap.wrap(figure["title"], 80)), fontsize=11)
     ax.grid(True, color="#dddddd", linewidth=0.6)
     ax.axhline(0, color="#888888", linewidth=0.6)
     ax.legend(fontsize=9)
