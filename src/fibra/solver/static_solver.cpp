@@ -777,7 +777,7 @@ void StaticSolver::test_conditions(int step, std::map<Index, std::pair<double, d
     // fabric's middle along x by strain x lx / 2 while the edges across held their tow ends'
     // mean where it was: the tows across were bent in the plane and the held edges took a
     // tangential force that grew with the load (29 N, 6.5 % of the axial force, at 2 % on the
-    // 480-fiber plain weave; docs/theory/fabric.md, "Biaxial tension").
+    // 480-fiber plain weave; docs/theory/fabric.md, "Mechanical tests").
     const double ex = 0.5 * st.strain * lx;
     disp[dof(0, 0)].second = u(0, 0) - ex;
     disp[dof(1, 0)].second = u(1, 0) + ex;
