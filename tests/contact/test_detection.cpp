@@ -295,6 +295,47 @@ TEST(Detection, CrossingAtTheEndOfAFiberIsClipped) {
   }
 }
 
+// The end of a fiber pressed against the side of a nearly parallel one (a tow's fibers next to
+// a grip that holds their ends across the tow while the tow turns): they come closest at that
+// end, and an element must sit there whatever the layout of the zone. Fiber b's end is pressed
+// 0.1 r into a's side and b leaves a at 0.08 rad; contact elements every 5 r (the woven
+// samples' spacing is 2.5 r). Measured before session 24's change (the plane of an element
+// dropped when it fell past a fiber's end, short zones anchored at their closest sample): at 7
+// of the 17 places of b's end along a the nearest element was 4.8-5.0 r away, its gap +0.3 r
+// (the end penetrated by 0.1 r unseen), at the 10 others 0.08-0.37 r inside; with b's end past
+// a's, 0.4 r inside a's end.
+TEST(Detection, EndOfAFiberPressedAgainstAnotherHasItsElementThere) {
+  const double r = 2e-5, length = 125 * r, slope = 0.08;
+  for (int k = -16; k <= 16; ++k) {
+    SCOPED_TRACE(k);
+    const double stagger = 0.25 * k * r;  // b's end along a, from a's end
+    Case c = base_case();
+    c.fibers.push_back(polyline("a", {Vec3(0, 0, 0), Vec3(0, length, 0)}, r, 20));
+    const Vec3 end(1.9 * r, stagger, 0), dir = Vec3(slope, 1.0, 0).normalized();
+    c.fibers.push_back(polyline("b", {end, end + length * dir}, r, 20));
+    const Model model = build_model(c);
+    DetectionParams params;
+    params.spacing = 5 * r;
+    ContactDetector detector(model, params);
+    const VecX& q = model.reference;
+    const Detection det = detector.detect(q);
+    check_consistency(model, q, det, 1e-12, 0.6);
+    ASSERT_EQ(det.zones.size(), 1u);
+    // Where a and b come closest: b's end when it lies along a, else a's end.
+    const bool b_end = stagger >= 0;
+    const Vec3 closest = b_end ? end : Vec3::Zero();
+    const double lateral = b_end ? 1.9 * r : 1.9 * r - stagger * slope;  // across a (b's axis, from a's end)
+    double nearest = 1e300, deepest = 1e300;
+    for (const ContactElement& e : det.elements) {
+      const Particle& p = b_end ? e.b : e.a;
+      nearest = std::min(nearest, (centre(model, q, p) - closest).norm());
+      deepest = std::min(deepest, gap(model, q, e));
+    }
+    EXPECT_LT(nearest, 1e-9 * r);
+    EXPECT_NEAR(deepest, lateral - 2 * r, 0.05 * r);
+  }
+}
+
 TEST(Detection, RadiiOneToTen) {
   const double r = 1e-4, big = 10 * r;
   // Thin fiber across a thick one (both orders of the fibers).
