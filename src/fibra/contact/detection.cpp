@@ -117,6 +117,14 @@ Vec3 tangent_at(const std::vector<CentroidCurve>& curves, Index first, Index cou
   return curves[first + local].derivative(eta).normalized();
 }
 
+// Point of a fiber's centroid line at fiber parameter u.
+Vec3 point_at(const std::vector<CentroidCurve>& curves, Index first, Index count, double u) {
+  Index local;
+  double eta;
+  split_parameter(u, count, local, eta);
+  return curves[first + local].value(eta);
+}
+
 // Where the plane through x_g normal to tau cuts a fiber's centroid line.
 enum class Cut {
   Inside,  // at u, within the fiber
@@ -150,20 +158,9 @@ Cut plane_cut(const std::vector<CentroidCurve>& curves, Index first, Index count
     }
     const bool done = std::abs(next - u) < 1e-12;
     u = next;
-    if (done) {
-      split_parameter(u, count, local, eta);
-      const CentroidCurve& cc = curves[first + local];
-      return std::abs((cc.value(eta) - x_g).dot(tau)) <= tolerance ? Cut::Inside : Cut::Failed;
-    }
+    if (done) return std::abs((point_at(curves, first, count, u) - x_g).dot(tau)) <= tolerance ? Cut::Inside : Cut::Failed;
   }
   return Cut::Failed;
-}
-
-Vec3 point_at(const std::vector<CentroidCurve>& curves, Index first, Index count, double u) {
-  Index local;
-  double eta;
-  split_parameter(u, count, local, eta);
-  return curves[first + local].value(eta);
 }
 
 // The sections of fibers i and j a contact element joins: both fibers cut by the plane through
@@ -191,22 +188,15 @@ bool cut_pair(const std::vector<CentroidCurve>& curves, const PairContext& ctx, 
   if (cj == Cut::Beyond && std::abs((end_j - x_g).dot(tau)) > ctx.r_j) return false;
   // The end of one fiber, the other cut by the plane through it (when both planes miss, the end
   // the other fiber still reaches past).
-  if (cj == Cut::Beyond) {
-    double u = u_i;
-    if (plane_cut(curves, ctx.first_i, ctx.count_i, end_j, tau, tolerance, u) == Cut::Inside) {
-      x_g = end_j;
-      u_i = u;
-      return true;
-    }
-  }
-  if (ci == Cut::Beyond) {
-    double u = u_j;
-    if (plane_cut(curves, ctx.first_j, ctx.count_j, end_i, tau, tolerance, u) == Cut::Inside) {
-      x_g = end_i;
-      u_j = u;
-      return true;
-    }
-  }
+  auto through_end = [&](const Vec3& end, Index first, Index count, double& u_other) {
+    double u = u_other;
+    if (plane_cut(curves, first, count, end, tau, tolerance, u) != Cut::Inside) return false;
+    x_g = end;
+    u_other = u;
+    return true;
+  };
+  if (cj == Cut::Beyond && through_end(end_j, ctx.first_i, ctx.count_i, u_i)) return true;
+  if (ci == Cut::Beyond && through_end(end_i, ctx.first_j, ctx.count_j, u_j)) return true;
   if (ci != Cut::Beyond || cj != Cut::Beyond) return false;
   x_g = 0.5 * (end_i + end_j);  // two ends side by side: the plane between them
   return true;
