@@ -81,7 +81,7 @@ increments = {}
   EXPECT_LT(err_s, 1e-3 * length);
   EXPECT_LT(err_a, 1e-3);
   EXPECT_LT(err_d / ref.deflection, 2e-3);  // relative, the 0.2% of the brief
-  EXPECT_NEAR(u.y(), 0.0, 1e-12);           // stays in its plane
+  EXPECT_NEAR(u.y(), 0.0, 1e-10 * length);  // stays in its plane (round-off: 1.2e-12 L on one thread)
 }
 
 INSTANTIATE_TEST_SUITE_P(LoadLevels, ElasticaCantilever,
