@@ -61,6 +61,14 @@ FiberSpec polyline(std::string name, std::vector<Vec3> points, double r, int ele
   return f;
 }
 
+// The detection of the model's reference state, contact elements every `spacing` along a zone.
+Detection detect_every(const Model& model, double spacing) {
+  DetectionParams params;
+  params.spacing = spacing;
+  ContactDetector detector(model, params);
+  return detector.detect(model.reference);
+}
+
 FiberSpec helix(std::string name, double radius, double pitch, double turns, double r, int elements) {
   FiberSpec f = fiber(std::move(name), r, elements);
   f.path.kind = PathSpec::Kind::Helix;
@@ -314,11 +322,8 @@ TEST(Detection, EndOfAFiberPressedAgainstAnotherHasItsElementThere) {
     const Vec3 end(1.9 * r, stagger, 0), dir = Vec3(slope, 1.0, 0).normalized();
     c.fibers.push_back(polyline("b", {end, end + length * dir}, r, 20));
     const Model model = build_model(c);
-    DetectionParams params;
-    params.spacing = 5 * r;
-    ContactDetector detector(model, params);
     const VecX& q = model.reference;
-    const Detection det = detector.detect(q);
+    const Detection det = detect_every(model, 5 * r);
     check_consistency(model, q, det, 1e-12, 0.6);
     ASSERT_EQ(det.zones.size(), 1u);
     // Where a and b come closest: b's end when it lies along a, else a's end.
@@ -333,6 +338,81 @@ TEST(Detection, EndOfAFiberPressedAgainstAnotherHasItsElementThere) {
     }
     EXPECT_LT(nearest, 1e-9 * r);
     EXPECT_NEAR(deepest, lateral - 2 * r, 0.05 * r);
+  }
+}
+
+// The same end along a long zone: b runs beside a at 0.3 r for 120 r and its last 10 r bend
+// in, its end pressed 0.1 r into a's side (a tow's fibers side by side at a grip, one end
+// pushed against its neighbour as the tow turns). A long zone's elements sit at the middles of
+// equal cells, the first half a spacing in from the zone's end. Without an element at b's end
+// (the code before session 25) the nearest element was 1.6-2.5 r from it at these 17 places,
+// the deepest gap -0.03 to 0 r against the end's -0.1 r: the end penetrated unseen until the
+// zone split into a short one (on the 480-fiber twill's shear, a pass per increment for the last
+// level's 18 increments). Both orders of the fibers (b is the sampled fiber or the other one).
+TEST(Detection, EndPressedAlongALongZoneHasItsElementThere) {
+  const double r = 2e-5, length = 140 * r;
+  for (int order = 0; order < 2; ++order) {
+    for (int k = 0; k <= 16; ++k) {
+      SCOPED_TRACE(::testing::Message() << "order " << order << " place " << k);
+      const double stagger = 0.25 * k * r;  // b's end along a, from a's end
+      const Vec3 end(1.9 * r, stagger, 0);
+      Case c = base_case();
+      auto a = polyline("a", {Vec3(0, 0, 0), Vec3(0, length, 0)}, r, 28);
+      auto b = polyline("b", {end, Vec3(2.3 * r, stagger + 10 * r, 0), Vec3(2.3 * r, stagger + 130 * r, 0)}, r, 26);
+      if (order == 0) {
+        c.fibers.push_back(a);
+        c.fibers.push_back(b);
+      } else {
+        c.fibers.push_back(b);
+        c.fibers.push_back(a);
+      }
+      const Model model = build_model(c);
+      const VecX& q = model.reference;
+      const Detection det = detect_every(model, 5 * r);
+      check_consistency(model, q, det, 1e-3, 0.6);  // sections at the bend interpolated between turned nodes
+      ASSERT_EQ(det.zones.size(), 1u);
+      ASSERT_GT(det.elements.size(), 20u);  // a long zone: 130 r at 5 r
+      const int fiber_b = order == 0 ? 1 : 0;
+      double nearest = 1e300, deepest = 1e300;
+      std::vector<double> along;  // elements' positions along a
+      for (const ContactElement& e : det.elements) {
+        const Particle& p = model.elements[e.a.element].fiber == fiber_b ? e.a : e.b;
+        nearest = std::min(nearest, (centre(model, q, p) - end).norm());
+        deepest = std::min(deepest, gap(model, q, e));
+        along.push_back(centre(model, q, p).y());
+      }
+      EXPECT_LT(nearest, 1e-9 * r);
+      EXPECT_NEAR(deepest, -0.1 * r, 0.02 * r);
+      // The end's element comes on top of the zone's regular layout, which it leaves alone:
+      // the next element is the first regular one, half a spacing in from the zone's extended
+      // end (measured: 1.6-2.5 r from b's end), the others 5.00-5.08 r apart.
+      std::sort(along.begin(), along.end());
+      EXPECT_GT(along[1] - along[0], 1.0 * r);
+      EXPECT_LT(along[1] - along[0], 2.6 * r);
+      for (size_t m = 2; m < along.size(); ++m) EXPECT_NEAR(along[m] - along[m - 1], 5 * r, 0.15 * r);
+    }
+  }
+}
+
+// Where the fibers do not come together at the end (b straight beside a at 0.3 r, its end
+// cutting the zone), the zone keeps its regular layout alone: no element more at b's end.
+TEST(Detection, ParallelEndKeepsTheRegularLayout) {
+  const double r = 2e-5, length = 140 * r;
+  for (int k = 0; k <= 8; ++k) {
+    SCOPED_TRACE(::testing::Message() << "place " << k);
+    const double stagger = 0.5 * k * r;
+    Case c = base_case();
+    c.fibers.push_back(polyline("a", {Vec3(0, 0, 0), Vec3(0, length, 0)}, r, 28));
+    c.fibers.push_back(polyline("b", {Vec3(2.3 * r, stagger, 0), Vec3(2.3 * r, stagger + 130 * r, 0)}, r, 26));
+    const Model model = build_model(c);
+    const Detection det = detect_every(model, 5 * r);
+    ASSERT_EQ(det.zones.size(), 1u);
+    std::vector<double> along;
+    for (const ContactElement& e : det.elements) along.push_back(centre(model, model.reference, e.b).y());
+    std::sort(along.begin(), along.end());
+    ASSERT_GT(along.size(), 20u);
+    for (size_t m = 1; m < along.size(); ++m) EXPECT_NEAR(along[m] - along[m - 1], 5 * r, 0.15 * r);
+    EXPECT_GT(along.front() - stagger, 1.0 * r);  // the first regular element, half a spacing in
   }
 }
 

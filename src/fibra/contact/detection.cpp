@@ -491,6 +491,14 @@ void ContactDetector::detect_fiber(int fiber, const VecX& q, Workspace& work, Fi
       const double step = count > 1 ? length / (count - 1) : 0.0;
       const double extended = length + step;
       const int n_regular = std::max(1, static_cast<int>(std::lround(extended / ctx.spacing)));
+      // A zone's first or last sample cut by a fiber's end: the sample within one sample of
+      // fiber i's end, or its match clamped at fiber j's end.
+      const double u_max_i = 2.0 * static_cast<double>(ctx.count_i);
+      const double u_max_j = 2.0 * static_cast<double>(ctx.count_j);
+      auto cut_by_an_end = [&](const ZonePoint& p) {
+        const double along_i = 0.5 * ctx.length_i * std::min(p.u_i, u_max_i - p.u_i);
+        return along_i <= ctx.sample || p.u_j <= 0.0 || p.u_j >= u_max_j;
+      };
       work.positions.clear();
       if (count == 1) {
         work.positions.push_back(0.0);
@@ -504,12 +512,6 @@ void ContactDetector::detect_fiber(int fiber, const VecX& q, Workspace& work, Fi
         // fiber pressed against another's side. Not elsewhere: the smallest distance at the
         // first or last sample of a zone along the middle of both fibers is noise (the 2 x 2
         // friction sample's relax then crept at 1e-6 for 1 000 increments, where it ends in 60).
-        const double u_max_i = 2.0 * static_cast<double>(ctx.count_i);
-        const double u_max_j = 2.0 * static_cast<double>(ctx.count_j);
-        auto cut_by_an_end = [&](const ZonePoint& p) {
-          const double along_i = 0.5 * ctx.length_i * std::min(p.u_i, u_max_i - p.u_i);
-          return along_i <= ctx.sample || p.u_j <= 0.0 || p.u_j >= u_max_j;
-        };
         if (anchor <= 0.0 && cut_by_an_end(work.points.front())) anchor = -0.5 * step;
         else if (anchor >= length && cut_by_an_end(work.points.back())) anchor = length + 0.5 * step;
         const double lo = 0.0, hi = length;
@@ -518,7 +520,25 @@ void ContactDetector::detect_fiber(int fiber, const VecX& q, Workspace& work, Fi
         for (int l = std::min(l_min, 0); l <= std::max(l_max, 0); ++l)
           work.positions.push_back(anchor + l * ctx.spacing);
       } else {
+        // Cells of equal length along the extended zone, an element at the middle of each
+        // (each stands for one cell: a uniform pressure gives equal forces).
         for (int l = 0; l < n_regular; ++l) work.positions.push_back(-0.5 * step + (l + 0.5) * extended / n_regular);
+        // An end of the zone cut by a fiber's end where the fibers come together (its sample
+        // closer than the next by 1 % of the radius) gets one more element at that end (the
+        // extended end, which the cut takes to the fiber's end). Without it the end of a fiber
+        // pressed along its neighbour's side (a tow's fibers at a grip, the tow turned) lay half
+        // a spacing from the zone's first element and penetrated unseen until the zone split
+        // into a short one, anchored at that end: on the 480-fiber twill's shear a zone at the
+        // turning edge split and merged at every increment of the last level, each time a pass.
+        // The regular elements stay where they are, so the layout changes by that one element
+        // when the fibers' ends come together or part (laid out afresh with the end's element
+        // as one of equal cells, the zone's elements moved by up to half a spacing when the
+        // condition flipped, and the 2 x 2 sample sheared by 40 degrees in 5-iteration
+        // increments failed after 12 cuts).
+        auto converges = [&](int at, int next) { return work.points[at].d < work.points[next].d - 0.01 * ctx.r_min; };
+        if (cut_by_an_end(work.points[0]) && converges(0, 1)) work.positions.insert(work.positions.begin(), -0.5 * step);
+        if (cut_by_an_end(work.points[count - 1]) && converges(count - 1, count - 2))
+          work.positions.push_back(length + 0.5 * step);
       }
       const int zone_local = static_cast<int>(out.zones.size());
       const int first_element = static_cast<int>(out.elements.size());
