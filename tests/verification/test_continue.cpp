@@ -313,8 +313,8 @@ TEST_F(Continue, ATestGoesOnWithTheDragThatLoadedItsLastLevel) {
 // they fit within 5 iterations and the level is cut once only, 0.5 and 0.5.
 // With session 25's detection (an element more at a fiber's end pressed along a long zone: in
 // this test's loading attempts it finds the wefts' fibers pressed into each other at their
-// gripped ends, up to 8.7 times the cap deep) the sizes on two threads go 0.5, 0.25, 0.0625, 0.0625, 0.02344, 0.01172,
-// 0.01172, 0.01758, 0.02637, 0.01709, 0.01709. Known weakness: on one thread (OMP_NUM_THREADS=1)
+// gripped ends, up to 8.7 times the cap deep) the sizes on two threads go 0.5, 0.25, 0.0625,
+// 0.0625, 0.02344, 0.01172, 0.01172, 0.01758, 0.02637, 0.01709, 0.01709. Known weakness: on one thread (OMP_NUM_THREADS=1)
 // the path differs by round-off and reaches a level accepted with 15 zones' penalties raised
 // (deepest 1.98 times the cap, within the pseudo-time allowance of 2); the next loading then
 // needs 6 iterations whatever its size, and fails after 12 cuts: a cut cannot lower a residual

@@ -505,8 +505,7 @@ void ContactDetector::detect_fiber(int fiber, const VecX& q, Workspace& work, Fi
       } else if (n_regular <= kShortZone) {
         double anchor = closest_approach(work.points);
         // Closest at the zone's first or last sample, and the zone cut there by a fiber's end
-        // (the sample within one sample of fiber i's end, or its match clamped at fiber j's
-        // end): the end may lie up to half a sample further (samples sit mid-way in their
+        // (cut_by_an_end): the end may lie up to half a sample further (samples sit mid-way in their
         // stretch), so the anchor is the zone's extended end, which the cut takes to the fiber's
         // end (cut_pair). Anchored at the sample, the element sat up to 0.37 r from the end of a
         // fiber pressed against another's side. Not elsewhere: the smallest distance at the
@@ -521,8 +520,7 @@ void ContactDetector::detect_fiber(int fiber, const VecX& q, Workspace& work, Fi
           work.positions.push_back(anchor + l * ctx.spacing);
       } else {
         // Cells of equal length along the extended zone, an element at the middle of each
-        // (each stands for one cell: a uniform pressure gives equal forces).
-        for (int l = 0; l < n_regular; ++l) work.positions.push_back(-0.5 * step + (l + 0.5) * extended / n_regular);
+        // (each stands for one cell: a uniform pressure gives equal forces); positions in order.
         // An end of the zone cut by a fiber's end where the fibers come together (its sample
         // closer than the next by 1 % of the radius) gets one more element at that end (the
         // extended end, which the cut takes to the fiber's end). Without it the end of a fiber
@@ -535,10 +533,12 @@ void ContactDetector::detect_fiber(int fiber, const VecX& q, Workspace& work, Fi
         // as one of equal cells, the zone's elements moved by up to half a spacing when the
         // condition flipped, and the 2 x 2 sample sheared by 40 degrees in 5-iteration
         // increments failed after 12 cuts).
-        auto converges = [&](int at, int next) { return work.points[at].d < work.points[next].d - 0.01 * ctx.r_min; };
-        if (cut_by_an_end(work.points[0]) && converges(0, 1)) work.positions.insert(work.positions.begin(), -0.5 * step);
-        if (cut_by_an_end(work.points[count - 1]) && converges(count - 1, count - 2))
-          work.positions.push_back(length + 0.5 * step);
+        auto end_element = [&](int at, int next) {
+          return cut_by_an_end(work.points[at]) && work.points[at].d < work.points[next].d - 0.01 * ctx.r_min;
+        };
+        if (end_element(0, 1)) work.positions.push_back(-0.5 * step);
+        for (int l = 0; l < n_regular; ++l) work.positions.push_back(-0.5 * step + (l + 0.5) * extended / n_regular);
+        if (end_element(count - 1, count - 2)) work.positions.push_back(length + 0.5 * step);
       }
       const int zone_local = static_cast<int>(out.zones.size());
       const int first_element = static_cast<int>(out.elements.size());
