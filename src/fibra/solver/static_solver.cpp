@@ -612,7 +612,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       return true;
     }
     prev_small_step = small_step;
-    if (iterations >= opt.max_iterations) return false;
+    if (iterations >= opt.max_iterations * m_iteration_factor) return false;
     if (iterations >= 4 && residual > 1e6 * history.front() && history.front() > 0) return false;
 
     // Solve H dq = -r. First by conjugate gradients preconditioned with the last factorization
@@ -1133,6 +1133,8 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     // 2 % would have taken 5 hours). A level costs about as many settling increments whatever
     // its size, so small levels waste time; a level that fails costs one Newton solve and a cut.
     int level_failures = 0;
+    // The first residual and load step of the last failed attempt at the current load factor.
+    double failed_first = -1.0, failed_dl = 0.0;
     m_relax_settling = false;
     bool relaxed = !relax;
     while (lambda < 1.0 - 1e-12 || !relaxed) {
@@ -1185,6 +1187,43 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
           if (!(test && step_dl > 0.0)) failed_floor = std::max(failed_floor, 2.0 * m_relax_drag);
           m_relax_drag = std::min(4.0 * m_relax_drag, relax_max);
         }
+        // Nothing to cut: an increment that moves no load (a test level's settling increment,
+        // a relax step's increments at lambda = 1), or one whose first residual a cut left as
+        // it was (a relax from the weave's end, where no load changes: the residual is the
+        // woven state's). With no stiffer drag left, the next attempt would start from the same
+        // state and fail the same way, and a cut would only shrink the next level: it gets
+        // twice, then four times max_iterations instead. A test at max_iterations = 5 on one
+        // thread cut a level's size 12 times while each attempt settled it in the same 5
+        // iterations to 2e-7 (tolerance 1e-6), one short of the small correction, and failed
+        // (docs/theory/solver.md, "Steps and increments").
+        const double first_residual = history.empty() ? -1.0 : history.front();
+        const bool same_start = step_dl > 0.0 && step_dl < failed_dl && failed_first > 0.0 &&
+                                std::abs(first_residual - failed_first) <= 1e-9 * failed_first;
+        failed_first = first_residual;
+        failed_dl = step_dl;
+        const bool nothing_to_cut = step_dl == 0.0 || same_start;
+        if (nothing_to_cut && !stiffer && attempts < max_increments) {
+          if (m_iteration_factor < 4) {
+            m_iteration_factor *= 2;
+            if (debug_newton())
+              fmt::print(stderr, " nothing to cut at load factor {:.6g}: again with {} Newton iterations\n", lambda,
+                         opt.max_iterations * m_iteration_factor);
+            continue;
+          }
+          result.status = RunResult::Status::Failed;
+          result.step = st.name;
+          result.load_factor = lambda;
+          result.attempted_load_factor = lambda + step_dl;
+          result.residual_history = history;
+          result.message = fmt::format(
+              "step \"{}\": the increment at load factor {:.6g} did not converge{} within {} Newton iterations (4 x "
+              "max_iterations; last relative residual {:.3e}, tolerance {:.1e}), and there is nothing to cut: {}",
+              st.name, lambda, relax ? fmt::format(" at the stiffest drag ({:.3g} N/m)", m_relax_drag) : "", iterations,
+              history.empty() ? 0.0 : history.back(), m_newton_tolerance,
+              step_dl == 0.0 ? "its loads are held (a test level settling, or a relax step's end)"
+                             : "a cut did not change its first residual (its loads do not change)");
+          return result;
+        }
         const int cuts_here = dl > 0.0 ? static_cast<int>(std::round(std::log2(nominal / dl))) : opt.max_cuts;
         if ((cuts_here >= opt.max_cuts && !stiffer) || attempts >= max_increments) {
           result.status = RunResult::Status::Failed;
@@ -1209,6 +1248,9 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         if (!stiffer) dl *= 0.5;
         continue;
       }
+      m_iteration_factor = 1;
+      failed_first = -1.0;
+      failed_dl = 0.0;
       const double used_drag = m_problem->drag();
       if (test && step_dl > 0.0) m_test_drag = used_drag;
       if (relax) {

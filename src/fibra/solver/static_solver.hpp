@@ -166,6 +166,7 @@ class StaticSolver {
   double m_relax_residual = 0;   // relax steps: drag force at the end of the last increment, relative
   double m_load_residual = 0;    // tests: drag force at the end of the last level's loading increment (0: none yet)
   bool m_loading = false;        // tests: the increment being solved moves the edges (a level's first)
+  int m_iteration_factor = 1;    // the current increment may take this many times max_iterations (1, 2 or 4)
   SolverStats m_stats;
   std::function<void(const std::string&)> m_progress;
 };
