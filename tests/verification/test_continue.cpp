@@ -89,6 +89,21 @@ class Continue : public ::testing::Test {
     return parse_case_toml("[start]\n" + start + "\n" + steps, (s_dir / "continued.toml").string());
   }
 
+  // Runs c with its output in s_dir / sub.
+  static RunReport run_in(const Case& c, const std::string& sub) {
+    RunOptions options;
+    options.out_dir = (s_dir / sub).string();
+    return run_case(c, options);
+  }
+  // From the relaxed state, sheared by 40 degrees in one level with at most max_iterations
+  // Newton iterations per increment (pseudo-time solves to pseudo_tolerance).
+  static Case sheared_in_one_level(int max_iterations) {
+    return continued("from = \"whole\"\nstep = \"relax\"",
+                     "[solver]\nmax_iterations = " + std::to_string(max_iterations) +
+                         "\ntest_inexact = 0\n[[step]]\nname = \"shear\"\nkind = \"shear\"\nangle = 40\nincrements = 1\n"
+                         "max_increments = 400\n");
+  }
+
   static constexpr const char* kPull = "[[step]]\nname = \"pull\"\nkind = \"biaxial\"\nstrain = 0.004\nincrements = 2\n";
   static inline fs::path s_dir;
   static inline bool s_whole = false;
@@ -106,9 +121,7 @@ TEST_F(Continue, TestingFromTheRelaxedStateRepeatsTheWholeRun) {
   const Case c = continued("from = \"whole\"\nstep = \"relax\"", kPull);
   EXPECT_EQ(c.start_step, "relax");
   EXPECT_EQ(c.steps.size(), 1u);
-  RunOptions options;
-  options.out_dir = (s_dir / "pull").string();
-  const RunReport r = run_case(c, options);
+  const RunReport r = run_in(c, "pull");
   ASSERT_EQ(r.result.status, RunResult::Status::Converged) << r.result.message;
   // The same curve: rows (increment, load, strains, forces, shear, contact elements,
   // penetration) equal to the solver's tolerance. The levels' pseudo-time solves stop at a
@@ -259,9 +272,7 @@ TEST_F(Continue, ATestGoesOnWithTheDragThatLoadedItsLastLevel) {
   // 1e-4 k0, a hundredth of first_loading.
   const Case c = continued("from = \"whole\"\nstep = \"pull\"",
                            "[solver]\nrelax_drag = 1e-4\n[[step]]\nname = \"more\"\nkind = \"biaxial\"\nstrain = 0.002\nincrements = 1\n");
-  RunOptions options;
-  options.out_dir = (s_dir / "more").string();
-  const RunReport r = run_case(c, options);
+  const RunReport r = run_in(c, "more");
   ASSERT_EQ(r.result.status, RunResult::Status::Converged) << r.result.message;
   const auto more = read_history(s_dir / "more" / "history.csv");
   ASSERT_GE(more.size(), 2u);
@@ -321,12 +332,8 @@ TEST_F(Continue, ATestGoesOnWithTheDragThatLoadedItsLastLevel) {
 // Iterations); the sizes are now the same on one and two threads.
 TEST_F(Continue, TestLevelsGrowBackAfterACut) {
   ASSERT_TRUE(s_whole);
-  const Case c = continued("from = \"whole\"\nstep = \"relax\"",
-                           "[solver]\nmax_iterations = 5\ntest_inexact = 0\n[[step]]\nname = \"shear\"\nkind = \"shear\"\n"
-                           "angle = 40\nincrements = 1\nmax_increments = 400\n");
-  RunOptions options;
-  options.out_dir = (s_dir / "grow").string();
-  const RunReport r = run_case(c, options);
+  const Case c = sheared_in_one_level(5);
+  const RunReport r = run_in(c, "grow");
   ASSERT_EQ(r.result.status, RunResult::Status::Converged) << r.result.message;
   std::vector<double> levels;  // load factors of the levels, in order
   for (const auto& row : read_history(s_dir / "grow" / "history.csv")) {
@@ -365,12 +372,8 @@ TEST_F(Continue, TestLevelsGrowBackAfterACut) {
 // 4e-6 on two, tolerance 1e-6) and the run failed there.
 TEST_F(Continue, SettlingAtTheStiffestDragGetsMoreIterations) {
   ASSERT_TRUE(s_whole);
-  const Case c = continued("from = \"whole\"\nstep = \"relax\"",
-                           "[solver]\nmax_iterations = 4\ntest_inexact = 0\n[[step]]\nname = \"shear\"\nkind = \"shear\"\n"
-                           "angle = 40\nincrements = 1\nmax_increments = 400\n");
-  RunOptions options;
-  options.out_dir = (s_dir / "settle").string();
-  const RunReport r = run_case(c, options);
+  const Case c = sheared_in_one_level(4);
+  const RunReport r = run_in(c, "settle");
   ASSERT_EQ(r.result.status, RunResult::Status::Converged) << r.result.message;
   const auto rows = read_history(s_dir / "settle" / "history.csv");
   ASSERT_FALSE(rows.empty());
@@ -384,10 +387,7 @@ TEST_F(Continue, RelaxThatCannotConvergeSaysWhy) {
   const Case c = continued("from = \"whole\"\nstep = \"weave\"",
                            "[solver]\nmax_iterations = 1\nrelax_drag = 1.0\n[[step]]\nname = \"settle\"\nkind = \"relax\"\n"
                            "increments = 1\n");
-  RunOptions options;
-  options.out_dir = (s_dir / "stuck").string();
-  const RunReport r = run_case(c, options);
-  std::printf("%s\n", r.result.message.c_str());
+  const RunReport r = run_in(c, "stuck");
   ASSERT_EQ(r.result.status, RunResult::Status::Failed);
   EXPECT_NE(r.result.message.find("stiffest drag"), std::string::npos) << r.result.message;
   EXPECT_NE(r.result.message.find("nothing to cut"), std::string::npos) << r.result.message;
