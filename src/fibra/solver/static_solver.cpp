@@ -1135,7 +1135,21 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     int level_failures = 0;
     // The first residual and load step of the last failed attempt at the current load factor.
     double failed_first = -1.0, failed_dl = 0.0;
+    // Once a cut left the first residual unchanged, the load factor has nothing to cut until an
+    // increment converges (cuts and retries no longer alternate on the same state).
+    bool uncuttable = false;
+    m_iteration_factor = 1;
     m_relax_settling = false;
+    // A failed run: the state at the last converged load factor, the attempt that failed.
+    auto fail = [&](double attempted, const std::vector<double>& history, std::string message) {
+      result.status = RunResult::Status::Failed;
+      result.step = st.name;
+      result.load_factor = lambda;
+      result.attempted_load_factor = attempted;
+      result.residual_history = history;
+      result.message = std::move(message);
+      return result;
+    };
     bool relaxed = !relax;
     while (lambda < 1.0 - 1e-12 || !relaxed) {
       // A test level that would leave less than a quarter of itself for a last level takes it
@@ -1201,7 +1215,8 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
                                 std::abs(first_residual - failed_first) <= 1e-9 * failed_first;
         failed_first = first_residual;
         failed_dl = step_dl;
-        const bool nothing_to_cut = step_dl == 0.0 || same_start;
+        uncuttable = uncuttable || same_start;
+        const bool nothing_to_cut = step_dl == 0.0 || uncuttable;
         if (nothing_to_cut && !stiffer && attempts < max_increments) {
           if (m_iteration_factor < 4) {
             m_iteration_factor *= 2;
@@ -1210,40 +1225,27 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
                          opt.max_iterations * m_iteration_factor);
             continue;
           }
-          result.status = RunResult::Status::Failed;
-          result.step = st.name;
-          result.load_factor = lambda;
-          result.attempted_load_factor = lambda + step_dl;
-          result.residual_history = history;
-          result.message = fmt::format(
+          return fail(lambda + step_dl, history, fmt::format(
               "step \"{}\": the increment at load factor {:.6g} did not converge{} within {} Newton iterations (4 x "
               "max_iterations; last relative residual {:.3e}, tolerance {:.1e}), and there is nothing to cut: {}",
               st.name, lambda, relax ? fmt::format(" at the stiffest drag ({:.3g} N/m)", m_relax_drag) : "", iterations,
               history.empty() ? 0.0 : history.back(), m_newton_tolerance,
               step_dl == 0.0 ? "its loads are held (a test level settling, or a relax step's end)"
-                             : "a cut did not change its first residual (its loads do not change)");
-          return result;
+                             : "a cut did not change its first residual (its loads do not change)"));
         }
         const int cuts_here = dl > 0.0 ? static_cast<int>(std::round(std::log2(nominal / dl))) : opt.max_cuts;
         if ((cuts_here >= opt.max_cuts && !stiffer) || attempts >= max_increments) {
-          result.status = RunResult::Status::Failed;
-          result.step = st.name;
-          result.load_factor = lambda;
-          result.attempted_load_factor = lambda + step_dl;
-          result.residual_history = history;
           if (attempts >= max_increments)
-            result.message = fmt::format(
+            return fail(lambda + step_dl, history, fmt::format(
                 "step \"{}\": stopped at load factor {:.6g} after {} increments tried (max_increments {}); the last "
                 "one, to {:.6g}, did not converge ({} Newton iterations, last relative residual {:.3e}, tolerance {:.1e})",
                 st.name, lambda, attempts, max_increments, lambda + step_dl, iterations,
-                history.empty() ? 0.0 : history.back(), m_newton_tolerance);
-          else
-            result.message = fmt::format(
-                "step \"{}\": the increment from load factor {:.6g} to {:.6g} did not converge after {} cuts "
-                "({} Newton iterations, last relative residual {:.3e}, tolerance {:.1e})",
-                st.name, lambda, lambda + dl, cuts_here, iterations, history.empty() ? 0.0 : history.back(),
-                m_newton_tolerance);
-          return result;
+                history.empty() ? 0.0 : history.back(), m_newton_tolerance));
+          return fail(lambda + step_dl, history, fmt::format(
+              "step \"{}\": the increment from load factor {:.6g} to {:.6g} did not converge after {} cuts "
+              "({} Newton iterations, last relative residual {:.3e}, tolerance {:.1e})",
+              st.name, lambda, lambda + dl, cuts_here, iterations, history.empty() ? 0.0 : history.back(),
+              m_newton_tolerance));
         }
         if (!stiffer) dl *= 0.5;
         continue;
@@ -1251,6 +1253,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       m_iteration_factor = 1;
       failed_first = -1.0;
       failed_dl = 0.0;
+      uncuttable = false;
       const double used_drag = m_problem->drag();
       if (test && step_dl > 0.0) m_test_drag = used_drag;
       if (relax) {
