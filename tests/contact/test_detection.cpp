@@ -394,6 +394,74 @@ TEST(Detection, EndPressedAlongALongZoneHasItsElementThere) {
   }
 }
 
+// b's end given its element where the fibers come together (b from 1.9 r at its end to 2.3 r
+// further on) keeps it while they stay pressed there, however they lie: straight at 1.9 r, or
+// held 1.97 r apart at the end (that element's force) and 1.9 r further on. With the element only
+// where the fibers come together, the second lost it, its ends then penetrated, the next
+// detection put it back: the 480-fiber twill's shear went back and forth at every detection of a
+// settling level. Parted (2.3 r) it goes, and a detector that never had it leaves fibers pressed
+// evenly to their ends with the regular layout alone (a uniform pressure, equal forces).
+TEST(Detection, EndKeepsItsElementWhileThePressHolds) {
+  const double r = 2e-5, length = 140 * r;
+  for (int k = 0; k <= 8; ++k) {
+    SCOPED_TRACE(::testing::Message() << "place " << k);
+    const double stagger = 0.5 * k * r;
+    const Vec3 end(0, stagger, 0);
+    // Fiber b: at `d_end` from a at its end, `d_along` from 10 r on.
+    auto model_with = [&](double d_end, double d_along) {
+      Case c = base_case();
+      c.fibers.push_back(polyline("a", {Vec3(0, 0, 0), Vec3(0, length, 0)}, r, 28));
+      c.fibers.push_back(polyline("b",
+                                  {Vec3(d_end * r, stagger, 0), Vec3(d_along * r, stagger + 10 * r, 0),
+                                   Vec3(d_along * r, stagger + 120 * r, 0), Vec3(2.3 * r, stagger + 125 * r, 0),
+                                   Vec3(2.3 * r, stagger + 130 * r, 0)},
+                                  r, 26));
+      return build_model(c);
+    };
+    const Model together = model_with(1.9, 2.3), straight = model_with(1.9, 1.9), held = model_with(1.97, 1.9),
+                parted = model_with(2.3, 2.3);
+    // The distance from b's end to the nearest element on b, the elements' spacings along a.
+    auto layout = [&](const Detection& det, const VecX& q, std::vector<double>& along) {
+      double nearest = 1e300;
+      along.clear();
+      for (const ContactElement& e : det.elements) {
+        const Vec3 x = centre(together, q, e.b);
+        nearest = std::min(nearest, std::abs(x.y() - stagger) + std::abs(x.z()));
+        along.push_back(x.y());
+      }
+      std::sort(along.begin(), along.end());
+      return nearest;
+    };
+    DetectionParams params;
+    params.spacing = 5 * r;
+    ContactDetector detector(together, params);
+    std::vector<double> along;
+    for (const auto& [name, model] :
+         {std::pair<const char*, const Model*>{"together", &together}, {"straight", &straight}, {"held", &held},
+          {"straight again", &straight}}) {
+      SCOPED_TRACE(name);
+      const Detection det = detector.detect(model->reference);
+      ASSERT_EQ(det.zones.size(), 1u);
+      ASSERT_GT(det.elements.size(), 20u);
+      // Within 1e-9 r; 0.02 r where both fibers end together (place 0: the cut meets a's end too).
+      EXPECT_LT(layout(det, model->reference, along), (k == 0 ? 2e-2 : 1e-9) * r);
+      EXPECT_GT(along[1] - along[0], 1.0 * r);  // then the regular layout, half a spacing in
+      EXPECT_LT(along[1] - along[0], 2.6 * r);
+      for (size_t m = 2; m < along.size(); ++m) EXPECT_NEAR(along[m] - along[m - 1], 5 * r, 0.15 * r);
+    }
+    // Parted, then pressed evenly again: the regular layout alone.
+    for (const auto& [name, model] :
+         {std::pair<const char*, const Model*>{"parted", &parted}, {"straight after parting", &straight}}) {
+      SCOPED_TRACE(name);
+      const Detection det = detector.detect(model->reference);
+      ASSERT_EQ(det.zones.size(), 1u);
+      EXPECT_GT(layout(det, model->reference, along), 1.0 * r);
+      for (size_t m = 1; m < along.size(); ++m) EXPECT_NEAR(along[m] - along[m - 1], 5 * r, 0.15 * r);
+    }
+    (void)end;
+  }
+}
+
 // Where the fibers do not come together at the end (b straight beside a at 0.3 r, its end
 // cutting the zone), the zone keeps its regular layout alone: no element more at b's end.
 TEST(Detection, ParallelEndKeepsTheRegularLayout) {

@@ -298,6 +298,8 @@ void ContactDetector::detect(const VecX& q, Detection& out) {
 void ContactDetector::detect_fiber(int fiber, const VecX& q, Workspace& work, FiberOutput& out) const {
   out.zones.clear();
   out.elements.clear();
+  out.last_end_keys.swap(out.end_keys);
+  out.end_keys.clear();
   const std::vector<ElementPair>& pairs = m_broad.pairs();
   const std::vector<CentroidCurve>& curves = m_broad.curves();
   const std::vector<Box>& boxes = m_broad.boxes();
@@ -533,8 +535,27 @@ void ContactDetector::detect_fiber(int fiber, const VecX& q, Workspace& work, Fi
         // as one of equal cells, the zone's elements moved by up to half a spacing when the
         // condition flipped, and the 2 x 2 sample sheared by 40 degrees in 5-iteration
         // increments failed after 12 cuts).
+        // Once there, the end's element stays while the fibers are pressed into each other at
+        // the end (centroids closer than r_i + r_j - 0.001 r_min), whether they come together
+        // there or not: once it holds the ends apart they no longer do, and with the first
+        // condition alone the next detection dropped it, the ends penetrated, and the one after
+        // put it back. On the 480-fiber twill's shear, zones where two fibers of a tow end side
+        // by side at an edge went back and forth at every detection of a settling level (a pass
+        // each time). It goes once the ends barely touch, its force (quadratic start) near zero.
+        // Not without the last detection's element: fibers pressed evenly to their ends (a
+        // uniform pressure) keep the regular layout alone, equal cells and equal forces.
+        // The key: fiber j and the zone's side along fiber i (which fiber's end cuts it may change
+        // from one detection to the next where both end side by side).
         auto end_element = [&](int at, int next) {
-          return cut_by_an_end(work.points[at]) && work.points[at].d < work.points[next].d - 0.01 * ctx.r_min;
+          const ZonePoint& p = work.points[at];
+          if (!cut_by_an_end(p)) return false;
+          const std::uint64_t key = (static_cast<std::uint64_t>(ctx.fiber_j) << 1) | (at == 0 ? 0u : 1u);
+          const bool kept = p.d < ctx.r_i + ctx.r_j - 0.001 * ctx.r_min &&
+                            std::find(out.last_end_keys.begin(), out.last_end_keys.end(), key) !=
+                                out.last_end_keys.end();
+          if (!kept && !(p.d < work.points[next].d - 0.01 * ctx.r_min)) return false;
+          out.end_keys.push_back(key);
+          return true;
         };
         if (end_element(0, 1)) work.positions.push_back(-0.5 * step);
         for (int l = 0; l < n_regular; ++l) work.positions.push_back(-0.5 * step + (l + 0.5) * extended / n_regular);

@@ -2,6 +2,7 @@
 /// Contact detection (METHOD §2): broad phase, proximity zones, intermediate geometry and
 /// contact elements (pairs of border particles facing each other). What is computed, with
 /// every choice and default: docs/theory/contact.md, "Detection".
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -68,6 +69,9 @@ class ContactDetector {
   struct FiberOutput {
     std::vector<ProximityZone> zones;
     std::vector<ContactElement> elements;
+    // Ends of a zone given their own element (fiber j << 1 | the zone's side along fiber i), this detection's and
+    // the last one's: an end keeps its element while the fibers stay pressed there.
+    std::vector<std::uint64_t> end_keys, last_end_keys;
   };
   const Model& m_model;
   DetectionParams m_params;
