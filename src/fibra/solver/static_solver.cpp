@@ -503,8 +503,12 @@ bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, do
       // Augmented Lagrangian: conditions within the tolerance; proximal anchors: no member
       // moved more than the tolerance since they were set (their springs' force is then
       // negligible).
-      const bool satisfied = m_bodies->violation(m_q) <= tolerance;
-      const bool anchored = m_bodies->anchor_drift(m_q) <= tolerance;
+      const double violation = m_bodies->violation(m_q), drift = m_bodies->anchor_drift(m_q);
+      const bool satisfied = violation <= tolerance;
+      const bool anchored = drift <= tolerance;
+      if (debug_newton() && !(satisfied && anchored))
+        fmt::print(stderr, " bindings: violation {:.3e} m, anchors' drift {:.3e} m, tolerance {:.3e} m: update {}\n",
+                   violation, drift, tolerance, update + 1);
       if (!satisfied) m_bodies->update_multipliers(m_q);
       if (!anchored || !satisfied) {
         m_bodies->set_anchors(m_q);
