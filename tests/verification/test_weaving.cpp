@@ -235,6 +235,14 @@ TEST(Weaving, PlainWeaveWithFrictionRelaxesToEquilibrium) {
   const IncrementInfo& woven = s.step_end_info[0];
   const IncrementInfo& relaxed = s.step_end_info[1];
   EXPECT_LE(relaxed.relax_residual, 1e-6);
+  std::printf("weave and relax: %d increments, %d Newton iterations, %d binding updates\n", s.stats.increments,
+              s.stats.iterations, s.stats.binding_updates);
+  // The binding loop ends once the anchors' springs pull with nothing that counts: with their
+  // drift alone as the test (below the binding tolerance) this run took 186 increments, 2 509
+  // Newton iterations and 358 binding updates for the same crimp (0.636 %) and a thickness
+  // within 0.1 um; now 23, 221 and 15.
+  EXPECT_LT(s.stats.binding_updates, 60);
+  EXPECT_LT(s.stats.iterations, 600);
   // Sum of the forces of the four edge bodies on the fabric.
   auto edge_sum = [&](const IncrementInfo& info) {
     Vec3 sum = Vec3::Zero();
