@@ -500,9 +500,7 @@ bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, do
     if (!ok) return false;
     bool settled = true;
     if (m_bodies) {
-      // Augmented Lagrangian: conditions within the tolerance; proximal anchors: no member
-      // moved more than the tolerance since they were set (their springs' force is then
-      // negligible).
+      // Augmented Lagrangian: conditions within the tolerance; proximal anchors: see below.
       const double violation = m_bodies->violation(m_q), drift = m_bodies->anchor_drift(m_q);
       const bool satisfied = violation <= tolerance;
       // Anchored: no member moved more than the tolerance since its anchor, or the anchors'
