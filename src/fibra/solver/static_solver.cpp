@@ -663,15 +663,28 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       double mean_diag = 0.0;
       for (Index d = 0; d < n; ++d) mean_diag += std::abs(m_hessian[m_problem->pattern().col_ptr()[d + 1] - 1]);
       mean_diag /= std::max<Index>(n, 1);
+      // Unshifted first, always: a shift left on once the tangent is positive again damps the
+      // steps along its softest modes, and a solve then stops on small steps short of the
+      // solution (a body turned by a moment ended 4e-5 off its angle). When a shift is needed,
+      // the search starts at a hundredth of the last one, not at 1e-14 of the mean diagonal: a
+      // tangent that needed a shift needs about as much at the next iteration. On the
+      // 480-fiber twill's shear (a body's free turn about z slightly negative through its
+      // bindings, -2.5 against a mean diagonal of 2.7e6) each shifted iteration went through
+      // 0, 1e-14, ..., 1e-6 of the mean diagonal: up to 6 factorizations, 27 s against 8 s
+      // (docs/performance.md, session 28).
       FactorStatus st = m_linear->factorize(m_hessian, shift);
       ++m_stats.factorizations;
       while (st == FactorStatus::NotPositiveDefinite && shift < mean_diag) {
-        shift = shift == 0.0 ? 1e-14 * mean_diag : shift * 100.0;
+        shift = shift == 0.0 ? std::max(1e-14, 1e-2 * m_last_shift) * mean_diag : shift * 100.0;
         st = m_linear->factorize(m_hessian, shift);
         ++m_stats.factorizations;
         ++m_stats.regularized_factorizations;
       }
       m_stats.time_factorization += seconds_since(t0);
+      if (st == FactorStatus::Ok && shift > 0.0) {
+        m_last_shift = shift / mean_diag;
+        ++m_stats.shifted_iterations;
+      }
       m_cg_excess = 0;
       m_fresh_cg = -1;
       if (debug_newton()) fmt::print(stderr, "  it {:2d} factorized ({:.2f} s)\n", iterations, seconds_since(t0));
@@ -709,11 +722,19 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     // tangents, linearized rotations) the damped steps failed increments that full steps pass.
     // And far above the equilibrium tolerance only (not the pseudo-time one, 1e-6: that cycle
     // went on around 1e-3).
+    // Rises are counted within this solve only: a binding update or new normals between two
+    // solves of an increment raise the residual by design. Counted as a stall, that rise turned
+    // the line search on from the next solve's first iteration, where on the 480-fiber twill's
+    // shear the energy test then held the steps to alpha = 0.1 for 9 iterations (the residual
+    // fell 6e-3 -> 2.6e-3) before full steps converged it in 4 (docs/performance.md, session 28).
     const bool stalled =
-        (searching && history[k - 1] > 1e3 * opt.residual_tolerance) || (k >= 4 && history[k - 1] > history[k - 2]) ||
+        (searching && history[k - 1] > 1e3 * opt.residual_tolerance) || (k >= first + 4 && history[k - 1] > history[k - 2]) ||
         (k >= first + 7 && history[k - 1] > 1e3 * m_newton_tolerance &&
          history[k - 1] > 0.9 * std::min({history[k - 2], history[k - 3], history[k - 4]}));
-    searching = searching || (opt.line_search && stalled && m_problem->drag() > 0.0);
+    if (!searching && opt.line_search && stalled && m_problem->drag() > 0.0) {
+      searching = true;
+      ++m_stats.searched_solves;
+    }
     m_problem->set_energy_base(m_q);
     const double s0 = dq.dot(r);
     double alpha = 1.0;

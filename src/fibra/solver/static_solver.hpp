@@ -50,8 +50,10 @@ struct SolverStats {
   int iterations = 0;
   int cuts = 0;
   int factorizations = 0;
-  int regularized_factorizations = 0;
+  int regularized_factorizations = 0;  ///< factorizations attempted with a shift
+  int shifted_iterations = 0;     ///< Newton iterations solved with a shifted factor
   int line_search_trials = 0;
+  int searched_solves = 0;        ///< Newton solves in which the line search turned on
   int roundoff_convergences = 0;  ///< increments accepted at the round-off floor of the residual
   int binding_updates = 0;        ///< augmented-Lagrangian multiplier updates
   int limited_steps = 0;          ///< Newton steps scaled down to the step limit
@@ -155,6 +157,7 @@ class StaticSolver {
   double m_test_drag = 0;        // drag that applied the last test level, of this run or its start's [N/m]
   bool m_normals_settled = true;  // the last increment's normals and friction cones were a fixed point
   bool m_reuse_factor = false;    // the last factorization may precondition the next Newton solve
+  double m_last_shift = 0;        // last shift a factorization needed, relative to its tangent's mean diagonal
   int m_cg_excess = 0;            // CG iterations since the last factorization beyond the first solve's, summed
   int m_fresh_cg = -1;            // iterations of the first CG solve after the last factorization (-1: none yet)
   VecX m_rhs;                     // right-hand side of the Newton solve
