@@ -257,9 +257,6 @@ increments = 2
   const Solved s = solve_toml(toml, "group.toml");
   ASSERT_TRUE(s.converged()) << s.result.message;
   ASSERT_EQ(s.step_end_states.size(), 2u);
-  std::printf("%d Newton iterations, %d factorizations, %d with a shift, %d iterations on a shifted factor\n",
-              s.stats.iterations, s.stats.factorizations, s.stats.regularized_factorizations,
-              s.stats.shifted_iterations);
   const Vec3 r0(0.1, 0.0005, 0.0002);
   std::vector<Vec3> x0, x1, x2;
   for (size_t i = 0; i < offsets.size(); ++i) {
