@@ -56,14 +56,9 @@ PcgResult pcg(const BlockPattern& pattern, const std::vector<double>& values, do
   ws.history.clear();
   if (ws.history.capacity() < static_cast<size_t>(max_iterations) + 1) ws.history.reserve(max_iterations + 1);
   const double bnorm = b.cwiseProduct(weight).norm();
-  // From x = 0: the first iterate is the preconditioned right-hand side M^-1 b scaled at its
-  // best (in the A-norm), for the cost of starting from M^-1 b itself (a preconditioning and a
-  // product), and every later iterate minimizes over a space that holds the one started from
-  // M^-1 b. On the 480-fiber twill's shear, M^-1 b from an aged factor had residuals of up to
-  // 21 times |b| (docs/performance.md, session 29).
-  x.setZero(b.size());
-  ws.r = b;
+  precondition(b, x);
   if (!(bnorm > 0.0)) {
+    x.setZero();
     out.converged = true;
     return out;
   }
@@ -74,6 +69,8 @@ PcgResult pcg(const BlockPattern& pattern, const std::vector<double>& values, do
     out.converged = out.relative_residual <= tolerance;
     return out.converged || !std::isfinite(out.relative_residual);
   };
+  symmetric_multiply(pattern, values, shift, x, ws.ap, ws.scratch);
+  ws.r = b - ws.ap;
   if (done()) return out;
   precondition(ws.r, ws.z);
   ws.p = ws.z;

@@ -20,7 +20,7 @@ void symmetric_multiply(const BlockPattern& pattern, const std::vector<double>& 
 struct PcgResult {
   bool converged = false;  ///< weighted residual below tolerance x weighted |b|
   bool breakdown = false;  ///< a search direction of non-positive curvature (matrix not SPD)
-  int iterations = 0;      ///< iterations (products with the matrix; as many preconditioner applications)
+  int iterations = 0;      ///< preconditioner applications after the first
   double relative_residual = 0;  ///< |W (b - A x)| / |W b| at the end
 };
 
@@ -34,7 +34,7 @@ struct PcgWorkspace {
 };
 
 /// Solves (A + shift I) x = b by conjugate gradients preconditioned by `precondition`
-/// (z = M^-1 r, M symmetric positive definite), starting from x = 0. Stops when
+/// (z = M^-1 r, M symmetric positive definite), starting from x = M^-1 b. Stops when
 /// |W (b - A x)| <= tolerance |W b| (W = diag(weight), the dofs' force scales) or after
 /// `max_iterations` further iterations; x holds the last iterate either way.
 PcgResult pcg(const BlockPattern& pattern, const std::vector<double>& values, double shift, const VecX& b, VecX& x,

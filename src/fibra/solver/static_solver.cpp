@@ -635,15 +635,9 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     bool solved = false;
     m_rhs = -r;
     if (opt.krylov_iterations > 0 && m_reuse_factor && m_linear->has_factor()) {
-      // At most half of krylov_iterations: a solve that needs more makes the next iteration
-      // factorize anyway (below), so this one factorizes instead. On the 480-fiber twill's
-      // shear, solves of 60-99 iterations and failed ones of 100 took 223 s of the CG's 1 100 s,
-      // their residuals hovering about 0.1 from the 40th iteration on (docs/performance.md,
-      // session 29).
-      const int cg_budget = std::max(1, opt.krylov_iterations / 2);
       const PcgResult cg = pcg(
           m_problem->pattern(), m_hessian, 0.0, m_rhs, dq, [this](const VecX& b, VecX& x) { m_linear->precondition(b, x); },
-          m_force_scale, opt.krylov_tolerance, cg_budget, m_pcg);
+          m_force_scale, opt.krylov_tolerance, opt.krylov_iterations, m_pcg);
       m_stats.krylov_iterations += cg.iterations;
       solved = cg.converged;
       if (debug_newton()) {
@@ -657,9 +651,8 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
                    seconds_since(t0), trace);
       }
       if (solved) ++m_stats.reused_factorizations;
-      // A slow solve (more than half of krylov_iterations, where CG now stops): the factor has
-      // aged, a new one is made. So also at the next iteration once the solves since the last
-      // factorization took,
+      // A slow solve (more than half of krylov_iterations): the factor has aged, the next
+      // iteration makes a new one. So also once the solves since the last factorization took,
       // beyond the iterations of the first solve after it, krylov_iterations in all (the price
       // of a factorization in iterations, ~100 on the 480-fiber tests): there a level's
       // settling solves took 32-54 iterations each with an aged factor against 3-15 with a
