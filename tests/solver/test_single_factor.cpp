@@ -171,6 +171,16 @@ TEST(SingleFactor, TreeCutIntoATopAndTwoBalancedParts) {
   single.assign(v);
   EXPECT_GT(single.top_share(), 0.0);   // a top, done on one thread
   EXPECT_LE(single.top_share(), 0.4);   // the rule's bound
+  // Packed: each supernode's lower trapezoid only, not CHOLMOD's whole diagonal blocks.
+  double packed = 0.0;
+  for (Index s = 0; s < v.nsuper; ++s) {
+    const double nscol = v.super[s + 1] - v.super[s], nsrow = v.pi[s + 1] - v.pi[s];
+    packed += nscol * nsrow - nscol * (nscol - 1) / 2;
+  }
+  EXPECT_EQ(single.value_bytes(), packed * sizeof(float));
+  EXPECT_LT(packed, count);
+  std::printf("%d supernodes, %.0f packed values against %d stored by CHOLMOD\n", static_cast<int>(v.nsuper), packed,
+              static_cast<int>(count));
   const VecX b = random_vector(grid.n(), 6);
   VecX x;
   single.solve(b, x);

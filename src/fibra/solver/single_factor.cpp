@@ -64,12 +64,29 @@ void SingleFactor::assign(const SupernodalView& f) {
     m_work.assign(m_n, 0.0);
     split_tree();
   }
-  const std::int64_t count = m_px[ns];
-  m_values.resize(count);
+  // Packed: column j of a supernode keeps its rows j .. nsrow-1 (CHOLMOD stores the diagonal
+  // block whole, its upper triangle unused: 14 % of the values on the 480-fiber twill).
+  if (!same || static_cast<Index>(m_offset.size()) != ns + 1) {
+    m_offset.assign(ns + 1, 0);
+    for (Index s = 0; s < ns; ++s) {
+      const std::int64_t nscol = m_super[s + 1] - m_super[s], nsrow = m_pi[s + 1] - m_pi[s];
+      m_offset[s + 1] = m_offset[s] + nscol * nsrow - nscol * (nscol - 1) / 2;
+    }
+  }
+  m_values.resize(m_offset[ns]);
   float* out = m_values.data();
   const double* in = f.values;
-#pragma omp parallel for schedule(static)
-  for (std::int64_t k = 0; k < count; ++k) out[k] = static_cast<float>(in[k]);
+  const std::int64_t* px = m_px.data();
+  const std::int64_t* offset = m_offset.data();
+#pragma omp parallel for schedule(dynamic, 64)
+  for (Index s = 0; s < ns; ++s) {
+    const Index nscol = m_super[s + 1] - m_super[s], nsrow = m_pi[s + 1] - m_pi[s];
+    for (Index j = 0; j < nscol; ++j) {
+      const double* from = in + px[s] + static_cast<std::int64_t>(j) * nsrow + j;
+      float* to = out + offset[s] + packed_column(j, nsrow);
+      for (Index i = 0; i < nsrow - j; ++i) to[i] = static_cast<float>(from[i]);
+    }
+  }
 }
 
 void SingleFactor::split_tree() {
@@ -163,36 +180,36 @@ SingleFactor::Node SingleFactor::node(Index s) const {
   d.nsrow = m_pi[s + 1] - m_pi[s];
   d.below = d.nsrow - d.nscol;
   d.rows = m_s_rows.data() + m_pi[s];
-  d.l = m_values.data() + m_px[s];
+  d.l = m_values.data() + m_offset[s];
   return d;
 }
 
 void SingleFactor::forward(Index s, Index end_column, double* y, double* delta, double* t) const {
   const auto [k1, nscol, nsrow, below, rows, l] = node(s);
   double* ys = y + k1;
-  // The diagonal block's triangle by columns.
+  // The diagonal block's triangle by columns (column j packed from its diagonal down).
   for (Index j = 0; j < nscol; ++j) {
-    const float* col = l + j * nsrow;
-    const double yj = ys[j] / static_cast<double>(col[j]);
+    const float* col = l + packed_column(j, nsrow);
+    const double yj = ys[j] / static_cast<double>(col[0]);
     ys[j] = yj;
-    axpy(col + j + 1, -yj, ys + j + 1, nscol - j - 1);
+    axpy(col + 1, -yj, ys + j + 1, nscol - j - 1);
   }
   if (below == 0) return;
   // t = (rows below) * y_s, four columns at a time (one pass over t per four columns).
   std::fill(t, t + below, 0.0);
   Index j = 0;
   for (; below >= kBlock && j + 4 <= nscol; j += 4) {
-    const float* c0 = l + j * nsrow + nscol;
-    const float* c1 = c0 + nsrow;
-    const float* c2 = c1 + nsrow;
-    const float* c3 = c2 + nsrow;
+    const float* c0 = below_part(l, j, nscol, nsrow);
+    const float* c1 = below_part(l, j + 1, nscol, nsrow);
+    const float* c2 = below_part(l, j + 2, nscol, nsrow);
+    const float* c3 = below_part(l, j + 3, nscol, nsrow);
     const double y0 = ys[j], y1 = ys[j + 1], y2 = ys[j + 2], y3 = ys[j + 3];
 #pragma omp simd
     for (Index i = 0; i < below; ++i)
       t[i] += static_cast<double>(c0[i]) * y0 + static_cast<double>(c1[i]) * y1 + static_cast<double>(c2[i]) * y2 +
               static_cast<double>(c3[i]) * y3;
   }
-  for (; j < nscol; ++j) axpy(l + j * nsrow + nscol, ys[j], t, below);
+  for (; j < nscol; ++j) axpy(below_part(l, j, nscol, nsrow), ys[j], t, below);
   // Rows of this part into y, rows of the top (at or beyond end_column) into delta (added up
   // and subtracted from y once both parts are done).
   for (Index i = 0; i < below; ++i) {
@@ -212,10 +229,10 @@ void SingleFactor::backward(Index s, double* y, double* t) const {
     for (Index i = 0; i < below; ++i) t[i] = y[rows[nscol + i]];
     Index j = 0;
     for (; below >= kBlock && j + 4 <= nscol; j += 4) {
-      const float* c0 = l + j * nsrow + nscol;
-      const float* c1 = c0 + nsrow;
-      const float* c2 = c1 + nsrow;
-      const float* c3 = c2 + nsrow;
+      const float* c0 = below_part(l, j, nscol, nsrow);
+      const float* c1 = below_part(l, j + 1, nscol, nsrow);
+      const float* c2 = below_part(l, j + 2, nscol, nsrow);
+      const float* c3 = below_part(l, j + 3, nscol, nsrow);
       double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
 #pragma omp simd reduction(+ : s0, s1, s2, s3)
       for (Index i = 0; i < below; ++i) {
@@ -229,12 +246,12 @@ void SingleFactor::backward(Index s, double* y, double* t) const {
       ys[j + 2] -= s2;
       ys[j + 3] -= s3;
     }
-    for (; j < nscol; ++j) ys[j] -= dot(l + j * nsrow + nscol, t, below);
+    for (; j < nscol; ++j) ys[j] -= dot(below_part(l, j, nscol, nsrow), t, below);
   }
   // The diagonal block's triangle, last column first.
   for (Index j = nscol - 1; j >= 0; --j) {
-    const float* col = l + j * nsrow;
-    ys[j] = (ys[j] - dot(col + j + 1, ys + j + 1, nscol - j - 1)) / static_cast<double>(col[j]);
+    const float* col = l + packed_column(j, nsrow);
+    ys[j] = (ys[j] - dot(col + 1, ys + j + 1, nscol - j - 1)) / static_cast<double>(col[0]);
   }
 }
 
