@@ -10,6 +10,7 @@
 //   BM_CholmodSolve               forward/back substitution for one right-hand side
 //   BM_CholmodPrecondition        the same with the factor rounded to floats (CG's preconditioner;
 //                                 two threads when OpenMP has them)
+//   BM_SymmetricMultiply/threads:T  the tangent times a vector (CG's other product)
 //   BM_NewtonIteration/threads:2/blas_threads:B  assembly + factorization + solve (target < 1 s)
 //   BM_EigenFactorize/fibers:F    Eigen SimplicialLDLT numeric factorization (fallback)
 //   BM_EigenSolve/fibers:F        Eigen solve
@@ -25,6 +26,7 @@
 
 #include "bench_common.hpp"
 #include "fibra/solver/blas_threads.hpp"
+#include "fibra/solver/krylov.hpp"
 #include "fibra/solver/linear_solver.hpp"
 
 namespace {
@@ -236,6 +238,23 @@ void time_substitution(benchmark::State& state, bool single) {
   }
   add_size_counters(state, b);
 }
+
+/// The tangent times a vector, as conjugate gradients do once per iteration (upper triangle
+/// stored, T OpenMP threads, each scattering into its own vector).
+void BM_SymmetricMultiply(benchmark::State& state) {
+  Bundle& b = bundle();
+  const OmpThreads threads(static_cast<int>(state.range(0)));
+  const VecX x = b.residual;
+  VecX y;
+  std::vector<VecX> scratch;
+  symmetric_multiply(b.problem->pattern(), b.hessian, 0.0, x, y, scratch);  // sizes the scratch
+  for (auto _ : state) {
+    symmetric_multiply(b.problem->pattern(), b.hessian, 0.0, x, y, scratch);
+    benchmark::DoNotOptimize(y.data());
+  }
+  add_size_counters(state, b);
+}
+BENCHMARK(BM_SymmetricMultiply)->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
 
 void BM_CholmodSolve(benchmark::State& state) { time_substitution(state, false); }
 BENCHMARK(BM_CholmodSolve)->UseRealTime()->Unit(benchmark::kMillisecond);
