@@ -62,16 +62,13 @@ void SingleFactor::assign(const SupernodalView& f) {
       m_delta[p].assign(m_n, 0.0);
     }
     m_work.assign(m_n, 0.0);
-    split_tree();
-  }
-  // Packed: column j of a supernode keeps its rows j .. nsrow-1 (CHOLMOD stores the diagonal
-  // block whole, its upper triangle unused: 14 % of the values on the 480-fiber twill).
-  if (!same || static_cast<Index>(m_offset.size()) != ns + 1) {
+    // Packed: column j of a supernode keeps its rows j .. nsrow-1 (CHOLMOD stores the diagonal
+    // block whole, its upper triangle unused: 14 % of the values on the 480-fiber twill). A
+    // supernode's size is where its column nscol would start.
     m_offset.assign(ns + 1, 0);
-    for (Index s = 0; s < ns; ++s) {
-      const std::int64_t nscol = m_super[s + 1] - m_super[s], nsrow = m_pi[s + 1] - m_pi[s];
-      m_offset[s + 1] = m_offset[s] + nscol * nsrow - nscol * (nscol - 1) / 2;
-    }
+    for (Index s = 0; s < ns; ++s)
+      m_offset[s + 1] = m_offset[s] + packed_column(m_super[s + 1] - m_super[s], m_pi[s + 1] - m_pi[s]);
+    split_tree();
   }
   m_values.resize(m_offset[ns]);
   float* out = m_values.data();

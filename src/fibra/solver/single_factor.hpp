@@ -5,10 +5,11 @@
 /// forward and back substitutions with the factor, and those stream the factor's values from
 /// memory (1.7 GB on the 480-fiber woven sample) without reusing them. Stored in floats the
 /// factor streams in half the time; its diagonal blocks are packed to their lower triangles
-/// (CHOLMOD stores them whole), 14 % fewer values to stream on the 480-fiber twill. The values are rounded once per factorization; the
-/// substitutions compute in double. The preconditioner is then M = L~ L~^T with L~ the rounded
-/// factor, still symmetric positive definite, and CG on the exact tangent corrects the
-/// difference like any other (docs/theory/solver.md, "Reusing the factorization").
+/// (CHOLMOD stores them whole), 14 % fewer values to stream on the 480-fiber twill. The
+/// values are rounded once per factorization; the substitutions compute in double. The
+/// preconditioner is then M = L~ L~^T with L~ the rounded factor, still symmetric positive
+/// definite, and CG on the exact tangent corrects the difference like any other
+/// (docs/theory/solver.md, "Reusing the factorization").
 ///
 /// The substitutions run on two threads: the supernodal elimination tree is cut into a top
 /// (done by one thread) and subtrees shared out in two balanced parts, which touch disjoint
