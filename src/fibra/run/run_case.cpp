@@ -285,6 +285,15 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                        {"load_factor", report.result.load_factor},
                        {"attempted_load_factor", report.result.attempted_load_factor},
                        {"residual_history", report.result.residual_history}};
+  if (report.result.status == RunResult::Status::Failed) {
+    const StallDiagnosis& d = report.result.diagnosis;
+    j["diagnosis"] = {{"tangent", d.tangent_name()},
+                      {"softest_stiffness", d.softest_stiffness},
+                      {"bending_stiffness", d.bending_stiffness},
+                      {"softest_mode", d.softest_mode},
+                      {"largest_motion", d.largest_motion},
+                      {"text", d.text()}};
+  }
   j["counts"] = {{"fibers", report.fibers}, {"nodes", report.nodes}, {"dofs", report.dofs},
                  {"elements", report.elements}, {"bodies", model.bodies.size()}, {"bindings", c.bindings.size()}};
   j["timings"] = {{"total", report.wall_time}, {"assembly", s.time_assembly},

@@ -557,6 +557,75 @@ void StaticSolver::print_indefinite_tangent(double shift, double mean_diag) {
   fmt::print(stderr, "\n");
 }
 
+StallDiagnosis StaticSolver::diagnose_stall(const VecX& failed) {
+  StallDiagnosis diag;
+  const std::vector<char>& fixed = m_problem->fixed();
+  const Index n = m_q.size();
+  VecX motion = failed - m_q;
+  for (Index d = 0; d < n; ++d)
+    if (fixed[d]) motion[d] = 0.0;
+  if (motion.allFinite()) diag.largest_motion = describe_motion(m_model, motion, m_length_scale);
+  // The tangent in weighed coordinates u = L q (L = m_length_scale: every dof a length), so
+  // that stiffnesses are in N/m whatever the dof: H_u = L^-1 H L^-1.
+  m_problem->evaluate(m_q, &m_gradient, &m_hessian);
+  const BlockPattern& p = m_problem->pattern();
+  double mean = 0.0, mean_raw = 0.0;
+  Index free = 0;
+  for (Index d = 0; d < n; ++d) {
+    if (fixed[d]) continue;
+    const double h = m_hessian[p.col_ptr()[d + 1] - 1];
+    mean += std::abs(h) / (m_length_scale[d] * m_length_scale[d]);
+    mean_raw += std::abs(h);
+    ++free;
+  }
+  if (free == 0) return diag;
+  mean /= free;
+  mean_raw /= free;
+  double shift = 0.0;
+  FactorStatus st = m_linear->factorize(m_hessian, shift);
+  const bool definite = st == FactorStatus::Ok;
+  while (st == FactorStatus::NotPositiveDefinite && shift < 1e3 * mean_raw) {
+    shift = shift == 0.0 ? 1e-12 * mean_raw : shift * 10.0;
+    st = m_linear->factorize(m_hessian, shift);
+  }
+  if (st != FactorStatus::Ok) return diag;
+  // Inverse iteration for the smallest eigenvalue of H_u: H_u w = v is H (L^-1 w) = L v.
+  VecX v = VecX::Ones(n), rhs(n), x(n), hv(n);
+  std::vector<VecX> scratch;
+  for (int it = 0; it <= 40; ++it) {
+    for (Index d = 0; d < n; ++d)
+      if (fixed[d]) v[d] = 0.0;
+    v /= v.norm();
+    if (it == 40) break;
+    rhs = v.cwiseProduct(m_length_scale);
+    m_linear->solve(rhs, x);
+    v = x.cwiseProduct(m_length_scale);
+  }
+  const VecX mode = v.cwiseQuotient(m_length_scale);  // in q
+  symmetric_multiply(p, m_hessian, 0.0, mode, hv, scratch);
+  diag.softest_stiffness = mode.dot(hv);
+  diag.softest_mode = describe_motion(m_model, mode, m_length_scale);
+  // A stiffness is zero next to the softest thing the model has: a whole fiber bending as a
+  // cantilever, 3 E I / L^3 (the mean diagonal is no scale: on a fiber of L/r = 1000 bending
+  // is 1e-10 of it). A factorization that fails proves the tangent indefinite, whatever the
+  // inverse iteration found.
+  double bending = std::numeric_limits<double>::infinity();
+  for (const Fiber& f : m_model.fibers) {
+    const Section& sec = m_model.sections[f.section];
+    bending = std::min(bending, 3.0 * m_model.materials[f.material].young * std::min(sec.inertia_1, sec.inertia_2) /
+                                    std::pow(f.length, 3));
+  }
+  diag.bending_stiffness = std::isfinite(bending) ? bending : 0.0;
+  const double zero = std::isfinite(bending) ? 1e-6 * bending : 1e-12 * mean;
+  if (std::abs(diag.softest_stiffness) <= zero)
+    diag.tangent = StallDiagnosis::Tangent::Singular;
+  else if (!definite || diag.softest_stiffness < 0.0)
+    diag.tangent = StallDiagnosis::Tangent::Indefinite;
+  else
+    diag.tangent = StallDiagnosis::Tangent::Definite;
+  return diag;
+}
+
 bool StaticSolver::newton(std::vector<double>& history, int& iterations, double& residual) {
   const SolverSpec& opt = m_case.solver;
   const std::vector<char>& fixed = m_problem->fixed();
@@ -1179,7 +1248,9 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     m_iteration_factor = 1;
     m_relax_settling = false;
     // A failed run: the state at the last converged load factor, the attempt that failed.
+    VecX failed_state;  // the last state of the last failed attempt
     auto fail = [&](double attempted, const std::vector<double>& history, std::string message) {
+      if (failed_state.size() == m_q.size()) result.diagnosis = diagnose_stall(failed_state);
       result.status = RunResult::Status::Failed;
       result.step = st.name;
       result.load_factor = lambda;
@@ -1222,6 +1293,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         return result;
       }
       if (!ok) {
+        failed_state = m_q;
         m_q = saved;
         if (m_bodies) m_bodies->set_multipliers(saved_multipliers);
         if (m_contact && m_problem->set_contacts(saved_contacts, m_contact->friction()))

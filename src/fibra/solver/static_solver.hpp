@@ -15,6 +15,7 @@
 #include "fibra/solver/linear_solver.hpp"
 #include "fibra/solver/problem.hpp"
 #include "fibra/solver/solver_state.hpp"
+#include "fibra/solver/stall_diagnosis.hpp"
 
 namespace fibra {
 
@@ -73,6 +74,8 @@ struct RunResult {
   double load_factor = 0;              ///< last converged load factor in that step
   double attempted_load_factor = 0;    ///< load factor of the failed attempt
   std::vector<double> residual_history;  ///< relative residuals of the last failed attempt
+  /// Failed runs: what moves without resisting and what the user can change (diagnosis.text()).
+  StallDiagnosis diagnosis;
   std::string status_name() const;     ///< "converged", "failed", "interrupted"
 };
 
@@ -118,6 +121,10 @@ class StaticSolver {
   /// Developers' trace of a shifted factorization (FIBRA_DEBUG_NEWTON): the indefinite local
   /// Hessians and the tangent's softest mode, by inverse iteration with the current factor.
   void print_indefinite_tangent(double shift, double mean_diag);
+  /// The diagnosis of an increment that cannot converge: the tangent at the last equilibrium
+  /// (the current state) and its softest mode, and the motion from there to `failed`, the
+  /// failed attempt's last state. Factorizes (the run stops after it).
+  StallDiagnosis diagnose_stall(const VecX& failed);
   /// Weaving: +1 / -1 when the contact normal from fiber fa towards fiber fb must be +z / -z
   /// (fibers of crossing tows, side from the weave matrix), 0 otherwise.
   int weave_side(int fa, int fb) const;

@@ -1,0 +1,183 @@
+// The diagnosis of an increment that cannot converge (solver/stall_diagnosis.hpp): where a
+// motion is, in the user's words, and the three kinds of tangent on whole runs that fail.
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+#include <numbers>
+#include <string>
+
+#include "fibra/solver/stall_diagnosis.hpp"
+#include "verification/verification_support.hpp"
+
+namespace fibra {
+namespace {
+
+using test::solve_toml;
+
+const char* kTwoFibers = R"(
+[[material]]
+name = "m"
+young = 1e9
+poisson = 0.3
+[[fiber]]
+name = "a"
+material = "m"
+radius = 0.001
+points = [[0, 0, 0], [0.1, 0, 0]]
+elements = 4
+[[fiber]]
+name = "b"
+material = "m"
+radius = 0.002
+points = [[0, 0.01, 0], [0.1, 0.01, 0]]
+elements = 4
+[[fix]]
+fiber = "a"
+node = "first"
+[[fix]]
+fiber = "b"
+node = "first"
+[[step]]
+name = "s"
+)";
+
+VecX weights(const Model& model) {
+  VecX w = VecX::Ones(model.num_dofs());
+  for (const Fiber& f : model.fibers)
+    for (Index n = f.first_node; n < f.first_node + f.num_nodes; ++n)
+      for (int k = 3; k < kNodeDofs; ++k) w[kNodeDofs * n + k] = model.sections[f.section].a;
+  return w;
+}
+
+TEST(DescribeMotion, NamesTheFiberTheNodeRangeAndTheDirection) {
+  const Case c = parse_case_toml(kTwoFibers, "two.toml");
+  const Model model = build_model(c);
+  const VecX w = weights(model);
+  VecX v = VecX::Zero(model.num_dofs());
+  // Nodes 3-5 of fiber b along -y (the sign of a mode is arbitrary: written positive), node 4 most.
+  const Index b0 = model.fibers[1].first_node;
+  v[kNodeDofs * (b0 + 3) + 1] = -0.6;
+  v[kNodeDofs * (b0 + 4) + 1] = -1.0;
+  v[kNodeDofs * (b0 + 5) + 1] = -0.5;
+  v[kNodeDofs * (b0 + 6) + 1] = -0.4;  // below half of the largest: not in the range
+  EXPECT_EQ(describe_motion(model, v, w), "fiber \"b\", nodes 3-5 (of 0-8): the centre line, along (0.00, 1.00, 0.00)");
+  // One node alone, and another fiber moving as much is counted.
+  v.setZero();
+  v[kNodeDofs * (b0 + 8) + 2] = 1.0;
+  v[kNodeDofs * 2 + 0] = 0.9;
+  EXPECT_EQ(describe_motion(model, v, w),
+            "fiber \"b\", node 8 (of 0-8) (and 1 other fiber or body): the centre line, along (0.00, 0.00, 1.00)");
+  EXPECT_EQ(describe_motion(model, VecX::Zero(model.num_dofs()), w), "");
+}
+
+TEST(DescribeMotion, SectionVectorsAreWeighedByTheRadius) {
+  const Case c = parse_case_toml(kTwoFibers, "two.toml");
+  const Model model = build_model(c);
+  const VecX w = weights(model);
+  VecX v = VecX::Zero(model.num_dofs());
+  // A turn of node 2's section on fiber a (|dg| = 1, radius 1e-3: a boundary motion of 1e-3 m)
+  // beside a centre-line motion of 3e-3 m on fiber b: the centre line is larger.
+  v[kNodeDofs * 2 + 4] = 1.0;
+  const Index b0 = model.fibers[1].first_node;
+  v[kNodeDofs * (b0 + 1) + 0] = 3e-3;
+  EXPECT_EQ(describe_motion(model, v, w), "fiber \"b\", node 1 (of 0-8): the centre line, along (1.00, 0.00, 0.00)");
+  v[kNodeDofs * (b0 + 1) + 0] = 0.4e-3;
+  EXPECT_EQ(describe_motion(model, v, w), "fiber \"a\", node 2 (of 0-8): the section vectors (the sections turn or deform)");
+}
+
+// A cantilever rolled up by a moment about a fixed axis (y), free in 3D. Its planar shape turns
+// unstable out of the plane: the tangent is indefinite from M = (pi/2) G J / L on (measured with
+// 400 increments, as a fraction of the full-circle moment 2 pi E I / L: 0.2475-0.25 at nu = 0,
+// where G J = E I, and 0.1925-0.195 at nu = 0.3, where (pi/2) G J / L is 0.1923 of it). The run
+// fails past that load and the diagnosis names the tip moving along y.
+TEST(StallDiagnosis, RollUpFreeIn3DIsUnstableOutOfItsPlane) {
+  const double young = 210e9, poisson = 0.3, radius = 1e-3, length = 1.0;
+  const double inertia = std::numbers::pi * std::pow(radius, 4) / 4.0;
+  const double full = 2.0 * std::numbers::pi * young * inertia / length;
+  const int increments = 20;
+  const test::Solved s = solve_toml(fmt::format(R"(
+[[material]]
+name = "steel"
+young = {}
+poisson = {}
+[[fiber]]
+name = "beam"
+material = "steel"
+radius = {}
+points = [[0, 0, 0], [{}, 0, 0]]
+elements = 40
+[[fix]]
+fiber = "beam"
+node = "first"
+[[step]]
+name = "roll"
+increments = {}
+  [[step.load]]
+  fiber = "beam"
+  node = "last"
+  moment = [0, {:.17g}, 0]
+)", young, poisson, radius, length, increments, -full));
+  ASSERT_FALSE(s.converged());
+  // Not before the increment that reaches the critical load (pi/2) G J / L.
+  const double critical = 0.25 / (1.0 + poisson);
+  EXPECT_GE(s.result.load_factor, critical - 1.0 / increments);
+  const StallDiagnosis& d = s.result.diagnosis;
+  EXPECT_EQ(d.tangent, StallDiagnosis::Tangent::Indefinite) << d.text();
+  EXPECT_NE(d.softest_mode.find("fiber \"beam\""), std::string::npos) << d.softest_mode;
+  EXPECT_NE(d.softest_mode.find("-80 (of 0-80): the centre line, along (0.00, 1.00, 0.00)"), std::string::npos)
+      << d.softest_mode;
+  EXPECT_NE(d.text().find("unstable"), std::string::npos);
+}
+
+// A fiber that nothing holds, pushed: a mechanism (its rigid motions).
+TEST(StallDiagnosis, LooseFiberIsAMechanism) {
+  const test::Solved s = solve_toml(R"(
+[[material]]
+name = "m"
+young = 1e9
+poisson = 0.3
+[[fiber]]
+name = "loose"
+material = "m"
+radius = 0.001
+points = [[0, 0, 0], [0.1, 0, 0]]
+elements = 4
+[[step]]
+name = "push"
+  [[step.load]]
+  fiber = "loose"
+  node = "last"
+  force = [0, 1, 0]
+)");
+  ASSERT_FALSE(s.converged());
+  const StallDiagnosis& d = s.result.diagnosis;
+  EXPECT_EQ(d.tangent, StallDiagnosis::Tangent::Singular) << d.text();
+  EXPECT_NE(d.softest_mode.find("fiber \"loose\", nodes 0-8"), std::string::npos) << d.softest_mode;
+  EXPECT_NE(d.text().find("[[fix]]"), std::string::npos);
+}
+
+// A stable cantilever given too few iterations for a large load in one increment: the tangent
+// is positive definite, the advice is more increments, and the attempt moved the tip along z.
+TEST(StallDiagnosis, StableModelThatNewtonCannotReachInOneIncrement) {
+  const test::Solved s = solve_toml(test::straight_cantilever(1.0, 0.01, 8, 1e9, 0.3, R"(
+[solver]
+max_iterations = 2
+max_cuts = 0
+[[step]]
+name = "load"
+increments = 1
+  [[step.load]]
+  fiber = "beam"
+  node = "last"
+  force = [0, 0, -500]
+)"));
+  ASSERT_FALSE(s.converged());
+  const StallDiagnosis& d = s.result.diagnosis;
+  EXPECT_EQ(d.tangent, StallDiagnosis::Tangent::Definite) << d.text();
+  EXPECT_GT(d.softest_stiffness, 0.0);
+  EXPECT_NE(d.text().find("more increments"), std::string::npos);
+  EXPECT_NE(d.largest_motion.find("fiber \"beam\""), std::string::npos) << d.largest_motion;
+}
+
+}  // namespace
+}  // namespace fibra
