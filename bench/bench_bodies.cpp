@@ -44,8 +44,8 @@
 #include "fibra/body/bodies.hpp"
 #include "fibra/io/case_reader.hpp"
 #include "fibra/model/model.hpp"
-#include "fibra/solver/assembler.hpp"
-#include "fibra/solver/block_pattern.hpp"
+#include "fibra/assembly/assembler.hpp"
+#include "fibra/assembly/block_pattern.hpp"
 #include "fibra/solver/linear_solver.hpp"
 #include "fibra/solver/problem.hpp"
 

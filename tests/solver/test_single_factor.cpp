@@ -10,7 +10,7 @@
 #include <random>
 #include <sstream>
 
-#include "fibra/solver/block_pattern.hpp"
+#include "fibra/assembly/block_pattern.hpp"
 #include "fibra/solver/linear_solver.hpp"
 #include "fibra/solver/single_factor.hpp"
 #include "verification/verification_support.hpp"

@@ -35,8 +35,8 @@
 
 #include "fibra/model/case.hpp"
 #include "fibra/model/model.hpp"
-#include "fibra/solver/assembler.hpp"
-#include "fibra/solver/block_pattern.hpp"
+#include "fibra/assembly/assembler.hpp"
+#include "fibra/assembly/block_pattern.hpp"
 
 namespace fibra {
 

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "fibra/core/types.hpp"
-#include "fibra/solver/block_pattern.hpp"
+#include "fibra/assembly/block_pattern.hpp"
 
 namespace fibra {
 

@@ -1,4 +1,4 @@
-#include "fibra/solver/block_pattern.hpp"
+#include "fibra/assembly/block_pattern.hpp"
 
 #include <algorithm>
 #include <bit>

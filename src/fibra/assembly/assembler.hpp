@@ -8,7 +8,7 @@
 #include <type_traits>
 #include <vector>
 
-#include "fibra/solver/block_pattern.hpp"
+#include "fibra/assembly/block_pattern.hpp"
 
 namespace fibra {
 

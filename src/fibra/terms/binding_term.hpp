@@ -1,0 +1,28 @@
+#pragma once
+/// Averaged bindings of fiber nodes and bodies to rigid bodies (METHOD §5), enforced by an
+/// augmented Lagrangian whose multipliers are lagged: the energy term of a BodySystem
+/// (body/bodies.hpp, docs/theory/bodies.md).
+#include "fibra/assembly/energy_term.hpp"
+#include "fibra/body/bodies.hpp"
+
+namespace fibra {
+
+/// The bindings of a BodySystem as an energy term.
+class BindingTerm final : public EnergyTerm {
+ public:
+  /// The bindings of `bodies` (kept by reference).
+  explicit BindingTerm(BodySystem& bodies) : m_bodies(bodies) {}
+  std::string name() const override { return "bindings"; }
+  const StencilSet* stencils() const override { return &m_bodies.stencils(); }
+  double assemble(const VecX& q, const AssemblyTarget& target) override {
+    return m_bodies.evaluate(q, target, target.gradient != nullptr, target.values != nullptr);
+  }
+  Index num_local() const override { return m_bodies.num_bindings(); }
+  std::span<const Index> local_groups(Index k) const override { return m_bodies.stencils().stencil(k); }
+  Eigen::MatrixXd local_hessian(Index k, const VecX& q) const override { return m_bodies.local_hessian(k, q); }
+
+ private:
+  BodySystem& m_bodies;
+};
+
+}  // namespace fibra

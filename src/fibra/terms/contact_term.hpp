@@ -1,0 +1,45 @@
+#pragma once
+/// Contact and friction: the penalty energy of every contact element and its frozen friction
+/// energy (docs/theory/contact.md), kernels on the 6-node stencil of an element pair, summed
+/// pair by pair. The elements (normals, laws, friction history) are lagged: they change only
+/// between minimizations (set_contacts).
+#include <vector>
+
+#include "fibra/assembly/energy_term.hpp"
+#include "fibra/contact/contact_element.hpp"
+#include "fibra/model/model.hpp"
+
+namespace fibra {
+
+/// Contact elements and friction between fibers.
+class ContactTerm final : public EnergyTerm {
+ public:
+  /// For the elements of `model` (kept by reference); no contact elements at first.
+  explicit ContactTerm(const Model& model) : m_model(model) {}
+  std::string name() const override { return "contact pairs"; }
+  const StencilSet* stencils() const override { return &m_pairs; }
+  double assemble(const VecX& q, const AssemblyTarget& target) override;
+  Index num_local() const override { return static_cast<Index>(m_pair_begin.empty() ? 0 : m_pair_begin.size() - 1); }
+  std::span<const Index> local_groups(Index k) const override { return m_pairs.stencil(k); }
+  /// The sum of the pair's elements' Hessians, friction included.
+  Eigen::MatrixXd local_hessian(Index k, const VecX& q) const override;
+
+  /// Replaces the contact elements (each oriented so that a.element < b.element) and the
+  /// friction parameters; true when the element pairs changed (the pattern must be rebuilt).
+  bool set_contacts(std::vector<ContactElement> contacts, const FrictionParams& friction);
+  const std::vector<ContactElement>& contacts() const { return m_contacts; }  ///< current elements
+  std::vector<ContactElement>& contacts() { return m_contacts; }              ///< (normals, laws, history)
+  const FrictionParams& friction() const { return m_friction; }               ///< friction parameters
+  /// Evaluated state of every contact element at q (same order as contacts()).
+  std::vector<ContactResponse> responses(const VecX& q) const;
+
+ private:
+  const Model& m_model;
+  StencilSet m_pairs;               // one stencil per element pair in contact (6 nodes)
+  std::vector<Index> m_pair_begin;  // contacts of pair s: [m_pair_begin[s], m_pair_begin[s+1])
+  std::vector<ContactElement> m_contacts;
+  FrictionParams m_friction;
+  std::vector<double> m_energy_buffer;
+};
+
+}  // namespace fibra

@@ -1,0 +1,456 @@
+// Every energy term of the total potential (assembly/energy_term.hpp) through the one
+// finite-difference harness (support/finite_difference.hpp: central differences, step
+// cbrt(eps) times the state's scale), at random states and at degenerate ones: a straight,
+// unstrained fiber; contact at zero gap, in the quadratic start and beyond it, open; friction
+// in stick, in slip and on the stick/slip boundary; a fiber end at its body's centre; a drag
+// along and across the fibers; moments about an axis along a reference section vector.
+//
+// For each: the gradient (every dof) against differences of the energy, the Hessian (free-free
+// upper values, through the term's own stencils in a pattern of its own) against differences
+// of the gradient, and the sum of the term's local Hessians against the assembled one (the
+// local Hessians are what diagnostics read). The checks ask for 1e-6 relative, where the
+// differences are good to ~1e-8, so a wrong term of relative size 1e-6 fails. On the
+// stick/slip boundary the friction energy is only C1, and at zero gap the Hessian has a kink:
+// there the gradient is checked, and the Hessian against the one-sided differences of the side
+// the kernel takes.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <random>
+#include <string>
+
+#include "fibra/body/bodies.hpp"
+#include "fibra/io/case_reader.hpp"
+#include "fibra/model/model.hpp"
+#include "fibra/solver/problem.hpp"
+#include "fibra/terms/beam_term.hpp"
+#include "fibra/terms/binding_term.hpp"
+#include "fibra/terms/contact_term.hpp"
+#include "fibra/terms/drag_term.hpp"
+#include "fibra/terms/load_term.hpp"
+#include "support/finite_difference.hpp"
+
+namespace fibra {
+namespace {
+
+using test::fd_gradient;
+using test::fd_jacobian;
+using test::fd_step;
+using test::rel_error;
+
+Eigen::MatrixXd dense(const BlockPattern& p, const std::vector<double>& values) {
+  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(p.rows(), p.rows());
+  for (Index c = 0; c < p.rows(); ++c)
+    for (int k = p.col_ptr()[c]; k < p.col_ptr()[c + 1]; ++k) {
+      m(p.row_idx()[k], c) = values[k];
+      m(c, p.row_idx()[k]) = values[k];
+    }
+  return m;
+}
+
+/// A term assembled on its own: its energy, gradient and dense Hessian at q.
+struct Assembled {
+  double energy = 0;
+  VecX gradient;
+  Eigen::MatrixXd hessian;
+};
+
+class TermHarness {
+ public:
+  TermHarness(EnergyTerm& term, const Model& model) : m_term(term), m_model(model) { rebuild(); }
+  /// After the term's stencils changed.
+  void rebuild() {
+    std::vector<const StencilSet*> sets;
+    if (const StencilSet* s = m_term.stencils()) sets.push_back(s);
+    m_pattern = std::make_unique<BlockPattern>(m_model.group_sizes(), sets);
+    m_term.pattern_changed(*m_pattern);
+  }
+  std::vector<char> fixed = {};
+  double energy(const VecX& q) { return assemble(q, false, false).energy; }
+  VecX gradient(const VecX& q) { return assemble(q, true, false).gradient; }
+  Assembled assemble(const VecX& q, bool want_gradient, bool want_hessian) {
+    if (fixed.empty()) fixed.assign(q.size(), 0);
+    std::vector<char> group_fixed(m_model.num_groups(), 0);
+    for (Index d = 0; d < q.size(); ++d)
+      if (fixed[d]) group_fixed[m_pattern->group_of_dof(d)] = 1;
+    Assembled a;
+    a.gradient = VecX::Zero(q.size());
+    std::vector<double> values(m_pattern->nonzeros(), 0.0);
+    const AssemblyTarget t{m_pattern.get(), &fixed, &group_fixed, want_gradient ? &a.gradient : nullptr,
+                           want_hessian ? &values : nullptr};
+    a.energy = m_term.assemble(q, t);
+    if (want_hessian) a.hessian = dense(*m_pattern, values);
+    return a;
+  }
+  /// The free-free block of a dense matrix (fixed rows and columns zeroed).
+  Eigen::MatrixXd free_part(Eigen::MatrixXd m) const {
+    for (Index d = 0; d < m.rows(); ++d)
+      if (!fixed.empty() && fixed[d]) m.row(d).setZero(), m.col(d).setZero();
+    return m;
+  }
+  /// The term's local Hessians summed into a dense matrix (upper blocks mirrored as assembled).
+  Eigen::MatrixXd local_sum(const VecX& q) const {
+    Eigen::MatrixXd m = Eigen::MatrixXd::Zero(q.size(), q.size());
+    for (Index k = 0; k < m_term.num_local(); ++k) {
+      const Eigen::MatrixXd h = m_term.local_hessian(k, q);
+      std::vector<Index> dofs;
+      for (Index g : m_term.local_groups(k))
+        for (int i = 0; i < m_pattern->group_size(g); ++i) dofs.push_back(m_pattern->group_dof(g) + i);
+      EXPECT_EQ(static_cast<Index>(dofs.size()), h.rows()) << m_term.name();
+      for (size_t i = 0; i < dofs.size(); ++i)
+        for (size_t j = 0; j < dofs.size(); ++j) m(dofs[i], dofs[j]) += h(i, j);
+    }
+    return m;
+  }
+
+ private:
+  EnergyTerm& m_term;
+  const Model& m_model;
+  std::unique_ptr<BlockPattern> m_pattern;
+};
+
+/// The harness's checks at q: gradient, Hessian, local Hessians (when the term has them).
+/// `scale`: the state's length scale for the difference step; `stiffness`: the term's own
+/// stiffness scale [N/m], the floor of the relative errors where the Hessian (or, times 1e-3
+/// scale, the gradient) is zero (an unstrained fiber, a contact at zero gap). `kink`: the
+/// Hessian jumps or has a kink at q (friction on its cone, contact at zero gap): the gradient
+/// is checked to the first-order error of differences across it, and each column of the Hessian
+/// against the one-sided differences of the side the kernel takes.
+void expect_derivatives(EnergyTerm& term, const Model& model, const VecX& q, double scale, double stiffness,
+                        const std::string& label, const std::vector<char>& fixed = {}, bool kink = false) {
+  TermHarness h(term, model);
+  h.fixed = fixed;
+  const Assembled a = h.assemble(q, true, true);
+  const double step = fd_step(scale);
+  const VecX gfd = fd_gradient([&](const VecX& x) { return h.energy(x); }, q, step);
+  EXPECT_LT(rel_error(a.gradient, gfd, 1e-3 * stiffness * scale), kink ? 1e-4 : 1e-6) << term.name() << ", " << label;
+  const Eigen::MatrixXd hess = h.free_part(a.hessian);
+  if (!kink) {
+    const Eigen::MatrixXd hfd = h.free_part(fd_jacobian([&](const VecX& x) { return h.gradient(x); }, q, step));
+    EXPECT_LT(rel_error(hess, hfd, stiffness), 1e-6) << term.name() << ", " << label;
+  } else {
+    // Forward and backward differences: the kernel's Hessian is one of the two sides.
+    Eigen::MatrixXd fwd(q.size(), q.size()), bwd(q.size(), q.size());
+    const VecX g0 = h.gradient(q);
+    VecX x = q;
+    for (Index i = 0; i < q.size(); ++i) {
+      x[i] = q[i] + step;
+      fwd.col(i) = (h.gradient(x) - g0) / step;
+      x[i] = q[i] - step;
+      bwd.col(i) = (g0 - h.gradient(x)) / step;
+      x[i] = q[i];
+    }
+    // Column by column: a dof's side of the kink depends on its direction. One-sided
+    // differences are first-order: good to ~step / scale = 6e-6 of the stiffness.
+    const Eigen::MatrixXd f = h.free_part(fwd), b = h.free_part(bwd);
+    for (Index i = 0; i < q.size(); ++i) {
+      const double e = std::min((hess.col(i) - f.col(i)).norm(), (hess.col(i) - b.col(i)).norm());
+      EXPECT_LT(e, 1e-4 * std::max(hess.norm(), stiffness)) << term.name() << ", " << label << ", column " << i;
+    }
+  }
+  if (term.num_local() > 0) {
+    EXPECT_LT(rel_error(h.free_part(h.local_sum(q)), hess, stiffness), 1e-12) << term.name() << ", " << label;
+  }
+}
+
+Vec3 random_unit(std::mt19937& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  return Vec3(n(rng), n(rng), n(rng)).normalized();
+}
+
+// A large-deformation state: rotations growing along the model (up to ~1 rad), 10 % stretches,
+// distortions.
+VecX random_state(const Model& model, std::mt19937& rng, double size) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const Vec3 axis = random_unit(rng);
+  VecX q = model.reference;
+  const Index n = model.num_nodes();
+  for (Index k = 0; k < n; ++k) {
+    const Mat3 rot = Eigen::AngleAxisd(static_cast<double>(k) / static_cast<double>(n) + 0.2 * u(rng), axis).toRotationMatrix();
+    q.segment<3>(9 * k) = 1.1 * (rot * model.reference.segment<3>(9 * k));
+    for (int a = 0; a < 2; ++a)
+      q.segment<3>(9 * k + 3 + 3 * a) = (1.0 + 0.1 * u(rng)) * (rot * model.reference.segment<3>(9 * k + 3 + 3 * a));
+  }
+  for (Index d = 0; d < model.node_dofs; ++d) q[d] += 0.05 * u(rng) * (d % 9 < 3 ? size : 1.0);
+  return q;
+}
+
+const char* kHelix = R"(
+[[material]]
+name = "carbon"
+model = "transverse"
+young = 230e9
+poisson = 0.2
+young_transverse = 15e9
+shear_axial = 24e9
+poisson_transverse = 0.45
+[[fiber]]
+name = "coil"
+material = "carbon"
+semi_axes = [0.05, 0.03]
+helix = { center = [0, 0, 0], axis = [0.2, 0.1, 1], radius = 0.4, pitch = 0.3, turns = 0.5 }
+elements = 3
+[[step]]
+name = "s"
+)";
+
+// E A / L of the helix's elements (230e9 Pa, 4.7e-3 m^2, ~0.4 m): the beam term's stiffness scale.
+constexpr double kBeamStiffness = 2.7e9;
+
+TEST(EnergyTerms, BeamElasticity) {
+  const Case c = parse_case_toml(kHelix, "helix.toml");
+  const Model model = build_model(c);
+  BeamTerm term(model);
+  std::mt19937 rng(11);
+  // The reference (unstrained, zero gradient): the Hessian alone.
+  expect_derivatives(term, model, model.reference, 0.4, kBeamStiffness, "reference");
+  for (int trial = 0; trial < 3; ++trial)
+    expect_derivatives(term, model, random_state(model, rng, 0.4), 0.4, kBeamStiffness, "random " + std::to_string(trial));
+}
+
+TEST(EnergyTerms, ExternalWork) {
+  const Case c = parse_case_toml(kHelix, "helix.toml");
+  const Model model = build_model(c);
+  LoadTerm term(model);
+  std::mt19937 rng(5);
+  for (Index k : {2, 5, 6})
+    for (int d = 0; d < 3; ++d) term.forces()[9 * k + d] = 100.0 * random_unit(rng)[d];
+  term.moments().push_back({6, 30.0 * random_unit(rng)});
+  // About the reference g1 of node 3: that vector's weight is zero (no stiffness on it).
+  term.moments().push_back({3, 20.0 * model.reference.segment<3>(9 * 3 + 3).normalized()});
+  // About the reference tangent of node 4: both section vectors weigh 1/2.
+  term.moments().push_back({4, 10.0 * model.reference.segment<3>(9 * 4 + 3).cross(model.reference.segment<3>(9 * 4 + 6))});
+  for (int trial = 0; trial < 3; ++trial) {
+    const VecX q = random_state(model, rng, 0.4);
+    term.set_energy_base(trial == 0 ? model.reference : q);
+    std::vector<char> fixed(model.num_dofs(), 0);
+    if (trial == 2)
+      for (Index d : {9 * 3 + 4, 9 * 6 + 7}) fixed[d] = 1;
+    expect_derivatives(term, model, q, 0.4, 1e3, "random " + std::to_string(trial), fixed);
+  }
+}
+
+// Two fibers of one element each crossing at 60 degrees, element 0 below element 1; contact
+// elements between them with the gap, normal force and slip each test asks for.
+const char* kCrossing = R"(
+[[material]]
+name = "m"
+young = 1e9
+poisson = 0.3
+[[fiber]]
+name = "low"
+material = "m"
+radius = 0.001
+points = [[-0.01, 0, 0], [0.01, 0, 0]]
+elements = 1
+[[fiber]]
+name = "high"
+material = "m"
+radius = 0.001
+points = [[-0.005, -0.00866, 0.002], [0.005, 0.00866, 0.002]]
+elements = 1
+[[step]]
+name = "s"
+)";
+
+struct Crossing {
+  Case c = parse_case_toml(kCrossing, "crossing.toml");
+  Model model = build_model(c);
+  VecX q;
+  std::vector<ContactElement> elements;
+  FrictionParams friction{0.3, 1e-6};
+
+  Crossing(std::mt19937& rng, int count) {
+    std::uniform_real_distribution<double> u(-1, 1);
+    q = random_state(model, rng, 0.002);
+    for (int k = 0; k < count; ++k) {
+      ContactElement e;
+      e.a = {0, 0.3 * u(rng), 0.0, 1e-3};
+      e.b = {1, 0.3 * u(rng), 0.0, -1e-3};
+      e.normal = random_unit(rng);
+      e.law = {1e6, 1e-6};
+      e.friction_normal = 0.5 + 0.5 * std::abs(u(rng));
+      elements.push_back(e);
+    }
+  }
+  double gap(const ContactElement& e) const {
+    return (particle_position(e.b, q.data() + 27) - particle_position(e.a, q.data())).dot(e.normal);
+  }
+  /// Moves fiber "high" along element k's normal to the given gap.
+  void set_gap(int k, double g) {
+    const double shift = g - gap(elements[k]);
+    for (int n = 3; n < 6; ++n) q.segment<3>(9 * n) += shift * elements[k].normal;
+  }
+  /// Element k's friction history such that its trial tangential force is `ratio` times the
+  /// cone's radius (below 1: stick; above: slip).
+  void set_slip(int k, double ratio, std::mt19937& rng) {
+    ContactElement& e = elements[k];
+    const Vec3 sep = particle_position(e.b, q.data() + 27) - particle_position(e.a, q.data());
+    Vec3 t = random_unit(rng);
+    t = (t - t.dot(e.normal) * e.normal).normalized();
+    e.friction_previous = Vec3::Zero();
+    // k_t = mu f_n / delta: a tangential slip of ratio * delta puts the trial force at ratio * mu f_n.
+    e.separation_previous = sep - ratio * friction.elastic_slip * t;
+  }
+};
+
+// The contact terms' length scale for the difference step: the normal law's regularization
+// depth p_r and the elastic slip (1e-6 m), the lengths over which their stiffness changes.
+constexpr double kContactScale = 1e-6;
+
+TEST(EnergyTerms, ContactNormalLaw) {
+  std::mt19937 rng(3);
+  // One element at each point of the normal law: open, zero gap, in the quadratic start (p_r = 1e-6),
+  // at its end, beyond it.
+  for (double gap : {2e-6, 0.0, -0.3e-6, -1e-6 + 1e-9, -5e-6}) {
+    Crossing x(rng, 1);
+    x.friction.mu = 0.0;
+    x.set_gap(0, gap);
+    ContactTerm term(x.model);
+    term.set_contacts(x.elements, x.friction);
+    // At zero gap the force and the stiffness are continuous, but the stiffness has a kink
+    // (0 before, k p / p_r after): central differences of the gradient are first order there.
+    expect_derivatives(term, x.model, x.q, kContactScale, 1e6, "gap " + std::to_string(gap), {}, gap == 0.0);
+  }
+}
+
+TEST(EnergyTerms, ContactWithFriction) {
+  std::mt19937 rng(8);
+  for (double ratio : {0.4, 3.0}) {
+    Crossing x(rng, 3);
+    for (int k = 0; k < 3; ++k) x.set_slip(k, ratio, rng);
+    x.set_gap(0, -2e-6);
+    ContactTerm term(x.model);
+    term.set_contacts(x.elements, x.friction);
+    std::vector<ContactResponse> r = term.responses(x.q);
+    ASSERT_EQ(r[0].slip, ratio > 1.0);
+    expect_derivatives(term, x.model, x.q, kContactScale, 1e6, ratio > 1.0 ? "slip" : "stick");
+  }
+  // On the cone: the friction energy is C1 there.
+  Crossing x(rng, 1);
+  x.set_gap(0, -2e-6);
+  x.set_slip(0, 1.0, rng);
+  ContactTerm term(x.model);
+  term.set_contacts(x.elements, x.friction);
+  expect_derivatives(term, x.model, x.q, kContactScale, 1e6, "stick/slip boundary", {}, true);
+}
+
+// Fiber ends bound to a tow body, tows to an edge body; one fiber end at its body's centre
+// (its radial direction is 0/0: docs/theory/bodies.md).
+const char* kBodies = R"(
+[[material]]
+name = "m"
+young = 1e9
+poisson = 0.3
+[[fiber]]
+name = "a"
+material = "m"
+radius = 0.01
+elements = 1
+points = [[0, 0, 0], [1, 0.03, 0.02]]
+[[fiber]]
+name = "b"
+material = "m"
+radius = 0.01
+elements = 1
+points = [[0, 0.05, 0.01], [1.1, 0.05, 0.01]]
+[[fiber]]
+name = "c"
+material = "m"
+radius = 0.01
+elements = 1
+points = [[0, 0.01, 0.06], [0.9, 0.01, 0.06]]
+[[fiber]]
+name = "d"
+material = "m"
+radius = 0.01
+elements = 1
+points = [[0, 0.3, 0], [1, 0.3, 0]]
+[[body]]
+name = "tow1"
+center = [1.0, 0.03, 0.02]
+[[body]]
+name = "edge"
+center = [1.05, 0.2, 0.0]
+[[binding]]
+body = "tow1"
+ends = [{ fiber = "a", node = "last" }, { fiber = "b", node = "last" }, { fiber = "c", node = "last" }]
+grip = [1, 3]
+spin = true
+[[binding]]
+body = "edge"
+bodies = ["tow1"]
+ends = [{ fiber = "d", node = "first" }, { fiber = "d", node = "last" }]
+[[step]]
+name = "s"
+)";
+
+TEST(EnergyTerms, Bindings) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (int trial = 0; trial < 3; ++trial) {
+    const Case c = parse_case_toml(kBodies, "bodies.toml");
+    const Model model = build_model(c);
+    BodySystem bodies(c, model);
+    BindingTerm term(bodies);
+    VecX q = model.reference;
+    if (trial > 0) {
+      // A committed increment first (frames differ from the initial ones), multipliers, then a
+      // random state.
+      for (const Body& b : model.bodies)
+        for (int k = 0; k < 3; ++k) q[b.first_dof + 3 + k] = 0.5 * normal(rng);
+      bodies.commit(q);
+      for (Index d = 0; d < model.node_dofs; ++d) q[d] += 0.05 * normal(rng);
+      for (const Body& b : model.bodies)
+        for (int k = 0; k < 6; ++k) q[b.first_dof + k] += 0.3 * normal(rng);
+      std::vector<double> lambda = bodies.multipliers();
+      for (double& l : lambda) l = 1e6 * normal(rng);
+      bodies.set_multipliers(lambda);
+    }
+    expect_derivatives(term, model, q, 1.0, 1e6, trial == 0 ? "reference (an end at its body's centre)" : "random " + std::to_string(trial));
+  }
+}
+
+TEST(EnergyTerms, Drag) {
+  const Case c = parse_case_toml(kBodies, "bodies.toml");
+  const Model model = build_model(c);
+  BodySystem bodies(c, model);
+  DragTerm term(model, &bodies);
+  std::mt19937 rng(2);
+  const VecX anchor = random_state(model, rng, 1.0);
+  for (double axial : {1.0, 0.01}) {
+    term.set(1e3, anchor, 100.0, axial);
+    VecX q = random_state(model, rng, 1.0);
+    for (const Body& b : model.bodies)
+      for (int k = 0; k < 6; ++k) q[b.first_dof + k] = anchor[b.first_dof + k] + 0.1 * random_unit(rng)[k % 3];
+    std::vector<char> fixed(model.num_dofs(), 0);
+    fixed[9 * 1 + 2] = 1;
+    expect_derivatives(term, model, q, 1.0, 1e3, "axial weight " + std::to_string(axial), fixed);
+  }
+}
+
+// The problem sums exactly its terms.
+TEST(EnergyTerms, ProblemIsTheSumOfItsTerms) {
+  const Case c = parse_case_toml(kBodies, "bodies.toml");
+  const Model model = build_model(c);
+  BodySystem bodies(c, model);
+  Problem p(model, &bodies);
+  std::vector<std::string> names;
+  for (const EnergyTerm* t : p.terms()) names.push_back(t->name());
+  EXPECT_EQ(names, (std::vector<std::string>{"beam elements", "contact pairs", "bindings", "drag", "external work"}));
+  std::mt19937 rng(4);
+  const VecX q = random_state(model, rng, 1.0);
+  p.set_drag(10.0, model.reference, 1.0, 0.5);
+  p.forces()[3] = 2.0;
+  const double total = p.evaluate(q, nullptr, nullptr);
+  double sum = 0.0;
+  for (EnergyTerm* t : p.terms()) {
+    TermHarness h(*t, model);  // (repoints the drag's value positions: energies only after this)
+    sum += h.energy(q);
+  }
+  EXPECT_NEAR(total, sum, 1e-12 * std::abs(total));
+}
+
+}  // namespace
+}  // namespace fibra
