@@ -151,6 +151,15 @@ StaticSolver::StaticSolver(const Case& c, const Model& model)
   } else {
     m_max_step = std::max(0.0, c.solver.max_step);
   }
+  // Scales of the softest things the model holds: a mode stiffness below a millionth of its
+  // most flexible fiber bent as a whole cantilever is zero (docs/theory/solver.md).
+  double bending = std::numeric_limits<double>::infinity();
+  for (const Fiber& f : model.fibers) {
+    const Section& sec = model.sections[f.section];
+    bending = std::min(bending, 3.0 * model.materials[f.material].young * std::min(sec.inertia_1, sec.inertia_2) /
+                                    std::pow(f.length, 3));
+  }
+  m_zero_stiffness = std::isfinite(bending) ? 1e-6 * bending : 0.0;
   m_q_start = m_q;
   m_drag_anchor = m_q;
   m_newton_tolerance = c.solver.residual_tolerance;
@@ -557,6 +566,27 @@ void StaticSolver::print_indefinite_tangent(double shift, double mean_diag) {
   fmt::print(stderr, "\n");
 }
 
+double StaticSolver::softest_mode(int iterations, VecX& mode) {
+  const std::vector<char>& fixed = m_problem->fixed();
+  const Index n = m_q.size();
+  // Inverse iteration with the factor of H + shift I in the dofs' own coordinates (where the
+  // shift is uniform, so the iteration finds H's most negative mode when there is one); the
+  // mode is then scaled to unit length in weighed coordinates u = L q (L = m_length_scale).
+  VecX v = VecX::Ones(n), x(n), hv(n);
+  for (int it = 0; it <= iterations; ++it) {
+    for (Index d = 0; d < n; ++d)
+      if (fixed[d]) v[d] = 0.0;
+    v /= v.norm();
+    if (it == iterations) break;
+    m_linear->solve(v, x);
+    v = x;
+  }
+  mode = v / v.cwiseProduct(m_length_scale).norm();
+  std::vector<VecX> scratch;
+  symmetric_multiply(m_problem->pattern(), m_hessian, 0.0, mode, hv, scratch);
+  return mode.dot(hv);
+}
+
 StallDiagnosis StaticSolver::diagnose_stall(const VecX& failed) {
   StallDiagnosis diag;
   const std::vector<char>& fixed = m_problem->fixed();
@@ -589,34 +619,15 @@ StallDiagnosis StaticSolver::diagnose_stall(const VecX& failed) {
     st = m_linear->factorize(m_hessian, shift);
   }
   if (st != FactorStatus::Ok) return diag;
-  // Inverse iteration for the smallest eigenvalue of H_u: H_u w = v is H (L^-1 w) = L v.
-  VecX v = VecX::Ones(n), rhs(n), x(n), hv(n);
-  std::vector<VecX> scratch;
-  for (int it = 0; it <= 40; ++it) {
-    for (Index d = 0; d < n; ++d)
-      if (fixed[d]) v[d] = 0.0;
-    v /= v.norm();
-    if (it == 40) break;
-    rhs = v.cwiseProduct(m_length_scale);
-    m_linear->solve(rhs, x);
-    v = x.cwiseProduct(m_length_scale);
-  }
-  const VecX mode = v.cwiseQuotient(m_length_scale);  // in q
-  symmetric_multiply(p, m_hessian, 0.0, mode, hv, scratch);
-  diag.softest_stiffness = mode.dot(hv);
+  VecX mode;
+  diag.softest_stiffness = softest_mode(40, mode);
   diag.softest_mode = describe_motion(m_model, mode, m_length_scale);
   // A stiffness is zero next to the softest thing the model has: a whole fiber bending as a
   // cantilever, 3 E I / L^3 (the mean diagonal is no scale: on a fiber of L/r = 1000 bending
   // is 1e-10 of it). A factorization that fails proves the tangent indefinite, whatever the
   // inverse iteration found.
-  double bending = std::numeric_limits<double>::infinity();
-  for (const Fiber& f : m_model.fibers) {
-    const Section& sec = m_model.sections[f.section];
-    bending = std::min(bending, 3.0 * m_model.materials[f.material].young * std::min(sec.inertia_1, sec.inertia_2) /
-                                    std::pow(f.length, 3));
-  }
-  diag.bending_stiffness = std::isfinite(bending) ? bending : 0.0;
-  const double zero = std::isfinite(bending) ? 1e-6 * bending : 1e-12 * mean;
+  diag.bending_stiffness = 1e6 * m_zero_stiffness;
+  const double zero = m_zero_stiffness > 0.0 ? m_zero_stiffness : 1e-12 * mean;
   if (std::abs(diag.softest_stiffness) <= zero)
     diag.tangent = StallDiagnosis::Tangent::Singular;
   else if (!definite || diag.softest_stiffness < 0.0)
