@@ -25,7 +25,7 @@ for a in "$@"; do
   esac
 done
 
-benches=(bench_beam bench_newton bench_cholmod_options bench_contact bench_bodies)
+benches=(bench_beam bench_newton bench_cholmod_options bench_contact bench_bodies bench_corpus)
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DFIBRA_BUILD_BENCH=ON >/dev/null
 cmake --build "$build" -j "$(nproc)" --target "${benches[@]}"
 
