@@ -287,5 +287,25 @@ TEST(Robustness, strand_7_pull_release) {
   checks.finish();
 }
 
+// ---------------------------------------------------------------------------------------------
+// An open overhand knot (a polymer fiber, r = 0.5 mm, the trefoil's three crossings with straight
+// tails; tests/verification/test_contact_verification.cpp) tightened by pulling its tails 5 mm
+// apart each. References: the knot is free but for its ends, so the two end forces balance to
+// 1e-6; the strands touch (self-contact at the end); the penetration stays within the cap at
+// every converged increment.
+// ---------------------------------------------------------------------------------------------
+TEST(Robustness, overhand_knot) {
+  const CaseRun s = solve_file("overhand_knot", 60);
+  Checks checks("overhand_knot");
+  if (checks.converged(s)) {
+    const Snapshot& last = s.snaps.back();
+    const Vec3 f0 = s.reaction(last, "knot", "first"), f1 = s.reaction(last, "knot", "last");
+    checks.at_most("|first end's force + last end's| / |last end's|", (f0 + f1).norm() / f1.norm(), 1e-6);
+    checks.at_least("contact zones at the end", last.info.contact.zones, 1);
+    checks.at_most("largest penetration / r over the increments", deepest_penetration(s), kCap);
+  }
+  checks.finish();
+}
+
 }  // namespace
 }  // namespace fibra::test
