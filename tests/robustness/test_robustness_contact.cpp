@@ -157,20 +157,24 @@ INSTANTIATE_TEST_SUITE_P(Robustness, ThreePointBending,
 // ---------------------------------------------------------------------------------------------
 // Capstan: a rope (r = 0.1 mm, an arc at rest) over a fixed drum, tensioned by dead loads T on
 // both ends along their tangents (axial strain 1e-4), then its first end pulled along its
-// tangent until the rope slides. The rope is held in its plane, or along the drum's axis for the
-// full turn (y at every node), and against spinning (g1z at its middle node); neither carries
-// load. Reference: Euler-Eytelwein for a rope of finite radius: the friction acts on the rope's
-// surface, at R_c = rho - r from the drum's axis, the tension at its centroid (radius rho):
-// rho dT = mu R_c T dphi, so T1 / T2 = exp(mu theta R_c / rho) once every contact element
-// slips (tests/verification/test_contact_verification.cpp). Departures: the shear that the
-// surface friction puts in the rope changes the normal forces by O(mu^2 r / rho) (0.1 % to 2.3 %
-// here); the contact elements, a rope radius apart, replace the exponential by a product of
-// point-contact factors (exact to O((mu r / rho)^3)); the ends turn by the slide over rho
-// (< 1e-3 rad) against the fixed directions of the loads, the rope stretches by 1e-4 and sinks
-// by the penetration: < 0.5 % together. Tolerance 0.5 % + mu^2 r / rho.
-// Checks: at the end of the pull every loaded contact element slips, T1 / T2 matches the
-// reference, and the ratio stays on its plateau once the rope slides (the last two increments
-// within 0.5 %).
+// tangent until the rope slides (by 1.5 times the stretch of the stick phase). The rope is held
+// in its plane, or along the drum's axis for the full turns (y at every node), and against
+// spinning (g1z at its middle node); neither carries load.
+// Reference: Euler-Eytelwein for a rope of finite radius r. The friction mu p (p the pressure
+// per unit length) acts on the rope's surface, at R_c = rho - r from the drum's axis, the
+// tension N at its centroid (radius rho). Along the rope, with the shear force V and the moment
+// M: dN/ds = mu p - V/rho, dV/ds = N/rho - p, dM/ds = -V - mu p r. Where M is uniform (the
+// rope keeps its curvature) V = -mu p r, so dN/ds = mu p R_c/rho and p (1 + mu r N'/N) = N/rho:
+// to first order in mu^2 r / rho,
+//   T1 / T2 = exp(mu theta (R_c / rho) (1 - mu^2 r / rho))
+// once every contact element slips (the last factor is 0.8 % of the ratio at mu = 0.5 over a
+// full turn, 0.9 % at 45 degrees and r / rho = 0.09). Departures: the next order, (mu^2 r /
+// rho)^2 mu theta < 3e-4; the contact elements, a rope radius apart, make the exponential a
+// product of point-contact factors, exact to O((mu r / rho)^3); the ends turn by the slide over
+// rho against the fixed directions of the loads, the rope stretches by up to 2e-3 and sinks by
+// the penetration: 0.5 % in all. Checks: at the end of the pull every loaded contact element
+// slips, T1 / T2 is within 0.5 % of the reference, and it stays on its plateau once the rope
+// slides (the last two increments within 0.5 %).
 // ---------------------------------------------------------------------------------------------
 struct CapstanCase {
   const char* name;
@@ -183,8 +187,8 @@ class Capstan : public ::testing::TestWithParam<CapstanCase> {};
 TEST_P(Capstan, SlidesAtTheEulerEytelweinRatio) {
   const CapstanCase& cc = GetParam();
   const double r = 0.1e-3, theta = cc.wrap_degrees * kPi / 180, tension = 1e-4 * kSteel * kPi * r * r;
-  const double rho = cc.ratio * r + r - 1e-3 * r, reference = std::exp(cc.mu * theta * (rho - r) / rho);
-  const double tolerance = 0.005 + cc.mu * cc.mu * r / rho;
+  const double rho = cc.ratio * r + r - 1e-3 * r;
+  const double reference = std::exp(cc.mu * theta * (rho - r) / rho * (1 - cc.mu * cc.mu * r / rho));
   const CaseRun s = solve_file(cc.name, 60);
   const int rope = s.fiber("rope");
   const Vec3 out = -s.g1(s.model.reference, 0, rope).cross(s.g2(s.model.reference, 0, rope));  // first end, outwards
@@ -204,7 +208,7 @@ TEST_P(Capstan, SlidesAtTheEulerEytelweinRatio) {
   if (checks.converged(s)) {
     checks.expect(loaded > 0 && slipping == loaded,
                   fmt::format("every loaded contact element slips at the end of the pull ({} of {})", slipping, loaded));
-    checks.relative("T1 / T2 at the end of the pull", ratios.back(), reference, tolerance);
+    checks.relative("T1 / T2 at the end of the pull", ratios.back(), reference, 0.005);
     checks.relative("T1 / T2, last increment against the one before", ratios.back(), ratios[ratios.size() - 2], 0.005);
   }
   checks.finish();
@@ -216,6 +220,7 @@ INSTANTIATE_TEST_SUITE_P(Robustness, Capstan,
                                            CapstanCase{"capstan_180deg_mu01_ratio100", 180, 0.1, 100},
                                            CapstanCase{"capstan_180deg_mu03_ratio40", 180, 0.3, 40},
                                            CapstanCase{"capstan_360deg_mu02_ratio50", 360, 0.2, 50},
+                                           CapstanCase{"capstan_360deg_mu05_ratio100", 360, 0.5, 100},
                                            CapstanCase{"capstan_drum_90deg_mu03_ratio10", 90, 0.3, 10}),
                          [](const auto& p) { return std::string(p.param.name); });
 
