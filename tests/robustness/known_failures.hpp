@@ -16,7 +16,7 @@ struct KnownFailure {
 
 inline constexpr KnownFailure kKnownFailures[] = {
     {"rollup_half",
-     "stops at load factor 0.525 (turn 0.525 pi): from load factor 0.2 the tangent is indefinite (softest mode "
+     "stops at load factor 0.525 (turn 0.525 pi): from load factor 0.5 the tangent is indefinite (softest mode "
      "out of the plane, g1x/g1z/g2y of the tip nodes, v.Hv = -2e-3 against a mean diagonal of 1.5e7: the moment, "
      "conservative only about its fixed axis, makes the planar arc a saddle, docs/theory/beam.md); with the shifted "
      "factor Newton's residual falls only linearly, 4.7e-5 to 2.3e-6 in 25 iterations; 12 cuts down to an increment "
@@ -27,7 +27,7 @@ inline constexpr KnownFailure kKnownFailures[] = {
      "attempt the residual falls to 3.7e-9 in 5 iterations, then climbs by 1.9 per iteration to 7.2e-4 at "
      "iteration 25; 12 cuts"},
     {"rollup_full_nu03",
-     "stops at load factor 0.2625 (turn 0.525 pi), the path of rollup_half: tangent indefinite from load factor 0.2 "
+     "stops at load factor 0.2625 (turn 0.525 pi), the path of rollup_half: tangent indefinite from load factor 0.25 "
      "(softest mode out of the plane, v.Hv = -2e-3 against a mean diagonal of 1.5e7); with the shifted factor the "
      "residual falls only linearly, 4.7e-5 to 2.3e-6 in 25 iterations; 12 cuts"},
     {"ring_pinched_large",
