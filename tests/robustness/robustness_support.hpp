@@ -108,7 +108,7 @@ struct CaseRun {
   std::string outcome() const {
     if (converged()) return "converged";
     if (out_of_time)
-      return fmt::format("stopped by its wall-time budget of {:.0f} s in step \"{}\" at load factor {:.4g}", budget,
+      return fmt::format("stopped by its wall-time budget of {:g} s in step \"{}\" at load factor {:.4g}", budget,
                          result.step, result.load_factor);
     return fmt::format("{} in step \"{}\" at load factor {:.4g} (attempted {:.4g}): {}", result.status_name(),
                        result.step, result.load_factor, result.attempted_load_factor, result.message);
