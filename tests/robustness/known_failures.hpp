@@ -1,0 +1,68 @@
+#pragma once
+/// The corpus's known failures: cases of tests/robustness/cases/ that today's solver does not
+/// solve to their reference, each with its diagnosis. A marked case still runs: it is reported
+/// as skipped ("known failure: ...") while one of its checks fails, and fails once they all
+/// pass, so that its mark goes. A case is never loosened or removed to pass; its mark goes
+/// when the solver solves it. docs/robustness.md lists the same cases.
+#include <string_view>
+
+namespace fibra::test {
+
+/// A case that fails today, and how.
+struct KnownFailure {
+  std::string_view name;       ///< case file name without extension
+  std::string_view diagnosis;  ///< what the solver does on it
+};
+
+inline constexpr KnownFailure kKnownFailures[] = {
+    {"rollup_half",
+     "stops at load factor 0.525 (turn 0.525 pi): from load factor 0.5 the tangent is indefinite (softest mode "
+     "out of the plane, g1x/g1z/g2y of the tip nodes, v.Hv = -2e-3 against a mean diagonal of 1.5e7: the moment, "
+     "conservative only about its fixed axis, makes the planar arc a saddle, docs/theory/beam.md); with the shifted "
+     "factor Newton's residual falls only linearly, 4.7e-5 to 2.3e-6 in 25 iterations; 12 cuts down to an increment "
+     "of 2.4e-5"},
+    {"rollup_full_nu0",
+     "stops at load factor 0.2625 (turn 0.525 pi, a quarter of the load): tangent indefinite from load factor 0.2 "
+     "(softest mode out of the plane at the tip, v.Hv = -7e-4 against a mean diagonal of 1.45e7); in the last "
+     "attempt the residual falls to 3.7e-9 in 5 iterations, then climbs by 1.9 per iteration to 7.2e-4 at "
+     "iteration 25; 12 cuts"},
+    {"rollup_full_nu03",
+     "stops at load factor 0.2625 (turn 0.525 pi), the path of rollup_half: tangent indefinite from load factor 0.25 "
+     "(softest mode out of the plane, v.Hv = -2e-3 against a mean diagonal of 1.5e7); with the shifted factor the "
+     "residual falls only linearly, 4.7e-5 to 2.3e-6 in 25 iterations; 12 cuts"},
+    {"ring_pinched_large",
+     "stops at load factor 0.454 (P R^2/EI = 1.36 of 3): from load factor 0.2 the tangent is indefinite, its "
+     "softest mode g1y alone, uniform over every node (v.Hv = -3e-4 against a mean diagonal of 2.3e7); the last "
+     "attempt's residual falls to 2.7e-8 in 6 iterations, then climbs to 3.1e-7 at iteration 25; 12 cuts. Held in "
+     "its plane by fixes (z, g2z, g1x, g1y on every node) the same case converges in 10 increments, its diameters "
+     "within 0.3 % of the elastica"},
+    {"three_point_bending_mu0_unheld",
+     "the beam's rigid motions left free by frictionless contact (sliding along y, turning, spin; softest modes "
+     "uniform y or g1x over the beam's nodes, v.Hv ~ -1e-8 against a mean diagonal of 7e8) stall Newton: after "
+     "5 cuts to load factor 0.031, the next increment's residual falls 0.40, 3.0e-5, 6.5e-7 and stays at 6.4e-7 "
+     "for 22 iterations; 12 cuts"},
+    {"crossed_radius_ratio_20",
+     "converges, but b's equilibrium is resolved to 6.6e-6 of its 15 uN load only (the contact force differs "
+     "from b's reactions by 2.3e-4): Newton's residual is measured against a floor of 1e-5 E A of the stiffest "
+     "fiber, 1650 N here, 1e8 times the thin fiber's load"},
+    {"capstan_drum_90deg_mu03_ratio10",
+     "the contact of a rope with a straight drum fiber across its plane degenerates: 32 elements in 4 zones at "
+     "the first increment, then 8, then 2 or 3 (the wrap needs about 16 at the default spacing), alternating "
+     "between 1 zone of 2 elements and 2 zones of 3 from one pull increment to the next; the rope hangs on "
+     "them (0.3 to 0.47 N each), and T1/T2 alternates between 1.00 and 1.06 instead of reaching 1.53"},
+    {"overhand_knot",
+     "reaches load factor 0.90 (4.5 mm per end), then an increment fails in the contact loops, not in Newton (its "
+     "last residual 1.6e-12): every detection pass at the solved state finds the same 7 elements (none fresh) "
+     "deeper than the cap, 1.06 to 1.38 of it (0.84 to 0.92 in the set just solved), alternately between the "
+     "element pairs 12/42 and 17/47; no penalty is raised, the normals settle in 3 to 6 updates, and the passes "
+     "repeat until max_detections; 12 cuts"},
+};
+
+/// The mark of case `name`, or null.
+inline const KnownFailure* find_known_failure(std::string_view name) {
+  for (const KnownFailure& k : kKnownFailures)
+    if (k.name == name) return &k;
+  return nullptr;
+}
+
+}  // namespace fibra::test
