@@ -16,9 +16,9 @@ struct KnownFailure {
 
 inline constexpr KnownFailure kKnownFailures[] = {
     {"rollup_half",
-     "stops at load factor 0.525 (turn 0.525 pi): from load factor 0.5 the tangent is indefinite (softest mode "
-     "out of the plane, g1x/g1z/g2y of the tip nodes, v.Hv = -2e-3 against a mean diagonal of 1.5e7: the moment, "
-     "conservative only about its fixed axis, makes the planar arc a saddle, docs/theory/beam.md); with the shifted "
+     "stops at load factor 0.525 (turn 0.525 pi): the planar arc buckles sideways past M = (pi/2) G J / L (the "
+     "tangent indefinite from there, its softest mode the tip out of the plane: under the moment conservative "
+     "about its fixed axis the circle is an equilibrium, not a minimum, docs/robustness.md); with the shifted "
      "factor Newton's residual falls only linearly, 4.7e-5 to 2.3e-6 in 25 iterations; 12 cuts down to an increment "
      "of 2.4e-5"},
     {"rollup_full_nu0",
@@ -50,12 +50,6 @@ inline constexpr KnownFailure kKnownFailures[] = {
      "the first increment, then 8, then 2 or 3 (the wrap needs about 16 at the default spacing), alternating "
      "between 1 zone of 2 elements and 2 zones of 3 from one pull increment to the next; the rope hangs on "
      "them (0.3 to 0.47 N each), and T1/T2 alternates between 1.00 and 1.06 instead of reaching 1.53"},
-    {"overhand_knot",
-     "reaches load factor 0.90 (4.5 mm per end), then an increment fails in the contact loops, not in Newton (its "
-     "last residual 1.6e-12): every detection pass at the solved state finds the same 7 elements (none fresh) "
-     "deeper than the cap, 1.06 to 1.38 of it (0.84 to 0.92 in the set just solved), alternately between the "
-     "element pairs 12/42 and 17/47; no penalty is raised, the normals settle in 3 to 6 updates, and the passes "
-     "repeat until max_detections; 12 cuts"},
 };
 
 /// The mark of case `name`, or null.

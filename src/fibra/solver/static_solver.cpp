@@ -481,6 +481,13 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     if (m_problem->set_contacts(contacts, friction)) m_linear->analyze(m_problem->pattern());
     const std::vector<ContactResponse> fresh_responses = m_problem->contact_responses(m_q);
     if (!weave && m_contact->passed_through(m_problem->contacts(), fresh_responses)) return false;
+    // In steps without a drag: the fresh elements penetrate beyond the cap where the solved
+    // ones did not, and nothing was raised (the fresh particles lie between the solved ones).
+    // Their zones get their stiffer penalty now: solved again with the same penalty, the
+    // passes alternated between two layouts, each within the cap where the other was not (an
+    // overhand knot tightened, element pairs 12/42 and 17/47, until max_detections: 12 cuts).
+    if (!weave && m_problem->drag() == 0.0 && raised == 0 && deepest > 1.0 && current_deepest <= 1.0)
+      m_contact_stats.penalty_raises += m_contact->adapt_penalty(m_problem->contacts(), fresh_responses);
     contacts = m_problem->contacts();
   }
   return false;
