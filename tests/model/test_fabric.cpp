@@ -3,6 +3,7 @@
 // computed from the geometry), and the expansion of a [fabric] into tows, bodies and bindings.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -83,6 +84,77 @@ INSTANTIATE_TEST_SUITE_P(Counts, Packing, ::testing::Values(3, 7, 48, 60));
 TEST(Packing, TooManyFibersDoNotFit) {
   EXPECT_TRUE(pack_ellipse(2000, 2e-5, 0.8e-3, 0.2e-3).empty());
   EXPECT_FALSE(pack_ellipse(48, 2e-5, 0.8e-3, 0.2e-3).empty());
+}
+
+// The size read_case checks before expanding is that of the expansion: fibers, their elements
+// (the fewest not longer than the element length, at least 2) and bodies.
+TEST(FabricExpansion, SizeBeforeExpandingIsTheExpansions) {
+  for (const double element_length : {2.0e-4, 3.0e-4, 1.0, 1.0e-6}) {
+    Case c = parse_case_toml(R"(
+[[material]]
+name = "glass"
+young = 72e9
+poisson = 0.22
+[fabric]
+pattern = "twill 2/1"
+warp = { tows = 3, spacing = 1.0e-3 }
+weft = { tows = 4, spacing = 1.2e-3, tow = { fibers = 5 } }
+  [fabric.tow]
+  fibers = 7
+  width = 0.7e-3
+  thickness = 0.25e-3
+  [fabric.fiber]
+  radius = 5.0e-5
+  material = "glass"
+  element_length = 1
+[[step]]
+name = "weave"
+kind = "weave"
+)", "fabric.toml");
+    c.fabric->warp.fiber.element_length = c.fabric->weft.fiber.element_length = element_length;
+    c.fibers.clear();
+    c.bodies.clear();
+    c.bindings.clear();
+    c.tows.clear();
+    const ModelSize size = fabric_size(*c.fabric);
+    expand_fabric(c);
+    SCOPED_TRACE(element_length);
+    // Warps span the 4 wefts (3 x 1.2 mm) plus two margins of 0.6 mm; wefts 2 x 1 mm + 1.2 mm.
+    EXPECT_NEAR(fabric_fiber_length(*c.fabric, true), 4.8e-3, 1e-15);
+    EXPECT_NEAR(fabric_fiber_length(*c.fabric, false), 3.2e-3, 1e-15);
+    double elements = 0;
+    for (const FiberSpec& f : c.fibers) {
+      const bool warp = f.name.rfind("warp", 0) == 0;
+      EXPECT_EQ(f.elements, fabric_fiber_elements(*c.fabric, warp)) << f.name;
+      EXPECT_EQ(f.elements, std::max(2.0, std::ceil((warp ? 4.8e-3 : 3.2e-3) / element_length - 1e-6))) << f.name;
+      elements += f.elements;
+    }
+    EXPECT_EQ(size.fibers, static_cast<double>(c.fibers.size()));
+    EXPECT_EQ(size.fibers, 3 * 7 + 4 * 5);
+    EXPECT_EQ(size.elements, elements);
+    EXPECT_EQ(size.bodies, static_cast<double>(c.bodies.size()));
+  }
+}
+
+// A count beyond an int is stopped before its conversion, also when the case was not read.
+TEST(FabricExpansion, ElementCountBeyondAnIntIsAnInputError) {
+  // Warp fibers of 1 mm + 2 margins of 0.9 mm: 2.8e9 elements of a picometre.
+  Case c = parse_case_toml(
+      test::glass_fabric("plain", 2, 3, 2e-5, 1e-4, "", "[[step]]\nname = \"weave\"\nkind = \"weave\"\n", 0.9e-3),
+      "fabric.toml");
+  c.fibers.clear();
+  c.bodies.clear();
+  c.bindings.clear();
+  c.tows.clear();
+  c.fabric->warp.fiber.element_length = 1e-12;
+  try {
+    expand_fabric(c);
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "fabric.warp.fiber.element_length");
+    EXPECT_NE(std::string(e.what()).find("into 2.8e+09 elements each, more than an int holds"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(FabricExpansion, TowsBodiesAndBindings) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <climits>
 #include <cmath>
 #include <numbers>
 #include <numeric>
@@ -195,6 +196,32 @@ std::vector<Eigen::Vector2d> pack_ellipse(int count, double r, double width, dou
   return best_for(lo);
 }
 
+double fabric_fiber_length(const FabricSpec& f, bool warp) {
+  // As expand_fabric places the tows: the other direction's outer axes plus the margins.
+  const FabricDirectionSpec& other = warp ? f.weft : f.warp;
+  const double n = other.tows;
+  const double first = (0 - 0.5 * (n - 1)) * other.spacing, last = (n - 1 - 0.5 * (n - 1)) * other.spacing;
+  return (last + f.margin) - (first - f.margin);
+}
+
+double fabric_fiber_elements(const FabricSpec& f, bool warp) {
+  const double element_length = (warp ? f.warp : f.weft).fiber.element_length;
+  return std::max(2.0, std::ceil(fabric_fiber_length(f, warp) / element_length - 1e-9));
+}
+
+ModelSize fabric_size(const FabricSpec& f) {
+  ModelSize size;
+  for (const bool warp : {true, false}) {
+    const FabricDirectionSpec& d = warp ? f.warp : f.weft;
+    const double fibers = static_cast<double>(d.tows) * static_cast<double>(d.tow.fibers);
+    size.fibers += fibers;
+    size.elements += fibers * fabric_fiber_elements(f, warp);
+    size.bodies += 2.0 * d.tows;
+  }
+  size.bodies += 4;
+  return size;
+}
+
 void expand_fabric(Case& c) {
   if (!c.fabric) return;
   const FabricSpec& f = *c.fabric;
@@ -250,8 +277,15 @@ void expand_fabric(Case& c) {
     const Direction& d = dirs[dir];
     const FabricDirectionSpec& s = *d.spec;
     const int tows = dir == 0 ? nw : nf;
-    const double length = dir == 0 ? x1 - x0 : y1 - y0;
-    const int elements = std::max(2, static_cast<int>(std::ceil(length / s.fiber.element_length - 1e-9)));
+    // The count as a real first: read_case refuses a fabric too large with its size; here only
+    // a count no int holds is stopped before it is converted.
+    const double count = fabric_fiber_elements(f, dir == 0);
+    if (!(count <= INT_MAX))
+      throw InputError(file, fmt::format("fabric.{}.fiber.element_length", d.name),
+                       fmt::format("{:.6g} m cuts the {} fibers ({:.6g} m long) into {:.3g} elements each, more than "
+                                   "an int holds ({})",
+                                   s.fiber.element_length, d.name, fabric_fiber_length(f, dir == 0), count, INT_MAX));
+    const int elements = static_cast<int>(count);
     for (int t = 0; t < tows; ++t) {
       TowSpec tow;
       tow.name = fmt::format("{}{}", d.name, t);
