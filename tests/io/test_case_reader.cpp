@@ -1797,6 +1797,14 @@ TEST(CaseReaderSize, LargeButFineModelsAreAccepted) {
             100000);
 }
 
+// Fibers of a nanometre in a 0.8 mm tow: read and packed at once (the packing listed 5e10
+// lattice sites before).
+TEST(CaseReaderSize, TinyFibersInALargeTow) {
+  const Case c = parse_case_toml(replace_once(kFabric, "radius = 2.0e-5", "radius = 1e-9"), "fabric.toml");
+  ASSERT_EQ(c.fibers.size(), 14u);
+  EXPECT_EQ(c.fibers[0].radius, 1e-9);
+}
+
 TEST(CaseReaderSize, AModelAboveTheMemoryIsRefused) {
   const SizeLimits small = memory_limits(64.0 * 1024 * 1024);
   const std::string text = replace_once(kMinimal, "elements = 4", "elements = 100000");

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numbers>
 
@@ -84,6 +85,35 @@ INSTANTIATE_TEST_SUITE_P(Counts, Packing, ::testing::Values(3, 7, 48, 60));
 TEST(Packing, TooManyFibersDoNotFit) {
   EXPECT_TRUE(pack_ellipse(2000, 2e-5, 0.8e-3, 0.2e-3).empty());
   EXPECT_FALSE(pack_ellipse(48, 2e-5, 0.8e-3, 0.2e-3).empty());
+}
+
+// Fibers tiny against the section: the lattice at their touching spacing has billions of sites;
+// the packing starts from a spacing near the one it finds and takes as long as for thick fibers.
+// The spacing falls with the radius by about 2.1 radii (the fibers kept inside the ellipse):
+// 1e-9 m and 1e-12 m give it within 3e-9 m, and 2e-6 m (whose touching lattice, 9e3 sites, is
+// listed as before) within 6e-6 m.
+TEST(Packing, TinyFibersArePackedAtOnce) {
+  const double width = 0.8e-3, thickness = 0.2e-3;
+  for (const int n : {3, 7, 48}) {
+    const auto closest = [&](double r) {
+      const auto start = std::chrono::steady_clock::now();
+      const std::vector<Eigen::Vector2d> p = pack_ellipse(n, r, width, thickness);
+      EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 10.0) << r;
+      EXPECT_EQ(static_cast<int>(p.size()), n) << r;
+      double d = 1e300;
+      for (size_t i = 0; i < p.size(); ++i) {
+        EXPECT_LE(std::pow(p[i].x() / (0.5 * width - r), 2) + std::pow(p[i].y() / (0.5 * thickness - r), 2), 1.0);
+        for (size_t j = i + 1; j < p.size(); ++j) d = std::min(d, (p[i] - p[j]).norm());
+      }
+      return d;
+    };
+    SCOPED_TRACE(n);
+    const double tiny = closest(1e-9), tinier = closest(1e-12), thin = closest(2e-6);
+    EXPECT_GT(tiny, 5e-5);
+    EXPECT_NEAR(tiny, tinier, 3e-9);
+    EXPECT_GT(tiny, thin);
+    EXPECT_NEAR(tiny, thin, 6e-6);
+  }
 }
 
 // The size read_case checks before expanding is that of the expansion: fibers, their elements

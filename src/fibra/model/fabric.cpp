@@ -182,9 +182,25 @@ std::vector<Eigen::Vector2d> pack_ellipse(int count, double r, double width, dou
     }
     return {};
   };
-  if (best_for(2.0 * r).empty()) return {};
+  // The bisection below starts from a spacing that holds them: 2r (touching) unless that
+  // lattice has too many sites to list (a fiber tiny against the section: 1e-9 m fibers in a
+  // 0.8 x 0.2 mm tow make 5e10). Then it starts from a spacing whose lattice holds about 4
+  // times the count (the area over the area per site), halved while it does not hold them.
+  const auto sites_at = [&](double d) { return std::numbers::pi * a * b / (d * d * std::sqrt(3.0) / 2.0); };
+  const double most_sites = std::max(1e5, 64.0 * count);
+  double lo = 2.0 * r;
+  bool holds = false;
+  if (sites_at(lo) > most_sites) {
+    double d = std::sqrt(std::numbers::pi * a * b / (4.0 * count * std::sqrt(3.0) / 2.0));
+    for (int k = 0; k < 3 && d > lo && sites_at(d) <= most_sites && !holds; ++k) {
+      holds = !best_for(d).empty();
+      if (!holds) d *= 0.5;
+    }
+    if (holds) lo = d;
+  }
+  if (!holds && best_for(lo).empty()) return {};
   // Largest spacing that still holds them (bisection; the count falls with the spacing).
-  double lo = 2.0 * r, hi = 2.0 * std::max(a, b) + 2.0 * r;
+  double hi = 2.0 * std::max(a, b) + 2.0 * r;
   for (int it = 0; it < 60; ++it) {
     const double mid = 0.5 * (lo + hi);
     if (best_for(mid).empty())
