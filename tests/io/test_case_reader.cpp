@@ -18,6 +18,8 @@
 #include <vector>
 
 #include "fibra/core/error.hpp"
+#include "fibra/model/fabric.hpp"
+#include "fibra/model/model_size.hpp"
 #include "io/case_compare.hpp"
 
 namespace fibra {
@@ -525,6 +527,11 @@ const std::vector<BadCase> kBadCases = {
     {"ElementsMissing", "elements = 20", "", "fiber[0].elements", "missing required key"},
     {"ElementsTooLarge", "elements = 20", "elements = 99999999999", "fiber[0].elements",
      "must be <= 2147483647"},
+    {"ElementsModelTooLarge", "elements = 20", "elements = 2000000000", "fiber[0].elements",
+     "2000000000 elements make a model too large to run: estimated 2e+09 elements, 4e+09 nodes, 3.6e+10 dofs, "
+     "6.66e+11 stiffness matrix entries and at least "},
+    {"ElementsBeyondTheMatrixIndices", "elements = 20", "elements = 2000000000", "fiber[0].elements",
+     "; the sparse solver holds at most 2147483647 matrix entries (32-bit indices)"},
     {"PointsTooFew", "points = [[0, 0, 0], [0.5, 0, 0], [1, 0, 0]]", "points = [[0, 0, 0]]",
      "fiber[0].points", "expected at least 2 points"},
     {"PointsCoincide", "points = [[0, 0, 0], [0.5, 0, 0], [1, 0, 0]]",
@@ -1410,6 +1417,28 @@ TEST_P(BadFabricInput, NamesFileKeyAndExpectation) {
 const std::string kSharedTow = "  [fabric.tow]\n  fibers = 3\n  width = 0.8e-3\n  thickness = 0.2e-3\n";
 
 const std::vector<BadCase> kBadFabricCases = {
+    // Sizes: the key that makes the model large, and the estimates. The weft's fibers (8 of
+    // 1.8 mm) then the warp's (6 of 2 mm) take the shared element length.
+    {"ElementLengthPicometre", "element_length = 2.5e-4", "element_length = 1e-12", "fabric.fiber.element_length",
+     "1e-12 m cuts each of the 8 weft fibers (0.0018 m long) into 1.8e+09 elements: a model too large to run: "
+     "estimated 2.64e+10 elements, 5.28e+10 nodes, 4.75e+11 dofs"},
+    {"OwnElementLengthPicometre", "warp = { tows = 2, spacing = 1.0e-3 }",
+     "warp = { tows = 2, spacing = 1.0e-3, fiber = { element_length = 1e-12 } }", "fabric.warp.fiber.element_length",
+     "1e-12 m cuts each of the 6 warp fibers (0.002 m long) into 2e+09 elements: a model too large to run"},
+    {"ElementLengthSubnormal", "element_length = 2.5e-4", "element_length = 5e-324", "fabric.fiber.element_length",
+     "cuts each of the 6 warp fibers (0.002 m long) into inf elements: a model too large to run: estimated inf "
+     "elements"},
+    {"ElementLengthInfinite", "element_length = 2.5e-4", "element_length = inf", "fabric.fiber.element_length",
+     "expected a finite number, got inf", false},
+    {"ElementLengthNaN", "element_length = 2.5e-4", "element_length = nan", "fabric.fiber.element_length",
+     "expected a finite number, got nan", false},
+    {"ElementLengthNegative", "element_length = 2.5e-4", "element_length = -2.5e-4", "fabric.fiber.element_length",
+     "must be > 0, got -0.00025"},
+    {"TwoBillionTows", "warp = { tows = 2, spacing = 1.0e-3 }", "warp = { tows = 2000000000, spacing = 1.0e-3 }",
+     "fabric.warp.tows",
+     "2000000000 tows of 3 fibers make 6e+09 warp fibers: a model too large to run: estimated "},
+    {"TwoBillionFibersPerTow", "  fibers = 3\n", "  fibers = 2000000000\n", "fabric.tow.fibers",
+     "2 tows of 2000000000 fibers make 4e+09 warp fibers: a model too large to run: estimated "},
     // The weave.
     {"UnknownPattern", "pattern = \"plain\"", "pattern = \"plian\"", "fabric.pattern",
      "unknown pattern \"plian\" (did you mean \"plain\"?)"},
@@ -1734,6 +1763,90 @@ TEST(CaseReaderTows, JsonWordsForWeaveSteps) {
                     "a weave step needs tows: define tow entries (or a fabric object)");
   expect_json_error(to_json(replace_once(kTows, "[weave]\nmatrix = [[1, 0], [0, 1]]\n", "")), "step[0].kind",
                     "a weave step needs the weave pattern: give a weave object (matrix or pattern)");
+}
+
+// -- Model size --------------------------------------------------------------------------
+// Models too large are refused while the file is read, with the key and the estimates; models
+// large but within the limits are read as written. Explicit limits make these independent of
+// the machine.
+
+/// Limits with `memory` bytes (and the solver's matrix index limit).
+SizeLimits memory_limits(double memory) {
+  SizeLimits limits;
+  limits.memory = memory;
+  return limits;
+}
+
+TEST(CaseReaderSize, LargeButFineModelsAreAccepted) {
+  const SizeLimits roomy = memory_limits(1024.0 * 1024 * 1024 * 1024 * 1024);  // 1 PiB
+  // The largest fiber whose matrix the 32-bit indices hold: 45 + 333 E <= 2^31 - 1.
+  const std::string largest = replace_once(kMinimal, "elements = 4", "elements = 6448899");
+  EXPECT_EQ(parse_case_toml(largest, kFile, roomy).fibers[0].elements, 6448899);
+  expect_input_error([&] { parse_case_toml(replace_once(kMinimal, "elements = 4", "elements = 6448900"), kFile, roomy); },
+                     kFile, "fiber[0].elements", "(32-bit indices)");
+  // A fabric of fine elements: 6 warp fibers of 20000, 8 weft fibers of 18000.
+  const Case fine = parse_case_toml(replace_once(kFabric, "element_length = 2.5e-4", "element_length = 1e-7"),
+                                    "fabric.toml", roomy);
+  ASSERT_EQ(fine.fibers.size(), 14u);
+  EXPECT_EQ(fine.fibers[0].elements, 20000);
+  EXPECT_EQ(fine.fibers[13].elements, 18000);
+  // On this machine's limits: a fiber of 100 000 elements (1.8 million dofs, at least 0.9 GiB).
+  const ModelSize size = fiber_size(100000);
+  if (size.bytes() > machine_size_limits().memory) GTEST_SKIP() << "less memory than " << format_bytes(size.bytes());
+  EXPECT_EQ(parse_case_toml(replace_once(kMinimal, "elements = 4", "elements = 100000"), kFile).fibers[0].elements,
+            100000);
+}
+
+// Fibers of a nanometre in a 0.8 mm tow: read and packed at once (the packing listed 5e10
+// lattice sites before).
+TEST(CaseReaderSize, TinyFibersInALargeTow) {
+  const Case c = parse_case_toml(replace_once(kFabric, "radius = 2.0e-5", "radius = 1e-9"), "fabric.toml");
+  ASSERT_EQ(c.fibers.size(), 14u);
+  EXPECT_EQ(c.fibers[0].radius, 1e-9);
+}
+
+TEST(CaseReaderSize, AModelAboveTheMemoryIsRefused) {
+  const SizeLimits small = memory_limits(64.0 * 1024 * 1024);
+  const std::string text = replace_once(kMinimal, "elements = 4", "elements = 100000");
+  for (const bool json : {false, true}) {
+    const std::string file = json ? "demo.json" : kFile;
+    const auto parse = [&] {
+      if (json)
+        parse_case_json(to_json(text), file, small);
+      else
+        parse_case_toml(text, file, small);
+    };
+    expect_input_error(parse, file, "fiber[0].elements",
+                       "100000 elements make a model too large to run: estimated 1e+05 elements, 2e+05 nodes, "
+                       "1.8e+06 dofs, 3.33e+07 stiffness matrix entries and at least ");
+    expect_input_error(parse, file, "fiber[0].elements", "; this machine has 64 MiB of memory");
+  }
+  EXPECT_EQ(parse_case_toml(replace_once(kMinimal, "elements = 4", "elements = 1000"), kFile, small).fibers[0].elements,
+            1000);
+}
+
+TEST(CaseReaderSize, FibersFineAloneButTooManyTogether) {
+  // The base case's fibers: 20, 8 and 30 elements; each alone takes less than 400 kB, all
+  // three more (about 574 kB).
+  const SizeLimits small = memory_limits(400e3);
+  ASSERT_LT(fiber_size(30).bytes(), 400e3);
+  expect_input_error([&] { parse_case_toml(kBase, kFile, small); }, kFile, "fiber",
+                     "the 3 fibers of the file (58 elements in all) make a model too large to run: estimated 58 "
+                     "elements, 119 nodes, 1.07e+03 dofs");
+  // With a fabric: its elements are counted with the file's (8 x 6 and 8 x 8 of 2.5e-4 m).
+  const std::string with_fiber =
+      replace_once(kFabric, "[[step]]\nname = \"weave\"",
+                   "[[fiber]]\nname = \"extra\"\nmaterial = \"glass\"\nradius = 1e-5\n"
+                   "points = [[0, 0, 1], [1, 0, 1]]\nelements = 500\n\n[[step]]\nname = \"weave\"");
+  const Case c = parse_case_toml(with_fiber, "fabric.toml");
+  ASSERT_EQ(c.fibers.size(), 15u);
+  const ModelSize fabric = fabric_size(*c.fabric);
+  EXPECT_EQ(fabric.elements, 6 * 8 + 8 * 8);
+  ModelSize all = fabric;
+  all += fiber_size(500);
+  const SizeLimits between = memory_limits(0.5 * (all.bytes() + std::max(fabric.bytes(), fiber_size(500).bytes())));
+  expect_input_error([&] { parse_case_toml(with_fiber, "fabric.toml", between); }, "fabric.toml", "fiber",
+                     "the 1 fibers of the file (500 elements in all, with the fabric's 112) make a model too large");
 }
 
 }  // namespace

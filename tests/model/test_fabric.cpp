@@ -3,6 +3,8 @@
 // computed from the geometry), and the expansion of a [fabric] into tows, bodies and bindings.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numbers>
 
@@ -83,6 +85,106 @@ INSTANTIATE_TEST_SUITE_P(Counts, Packing, ::testing::Values(3, 7, 48, 60));
 TEST(Packing, TooManyFibersDoNotFit) {
   EXPECT_TRUE(pack_ellipse(2000, 2e-5, 0.8e-3, 0.2e-3).empty());
   EXPECT_FALSE(pack_ellipse(48, 2e-5, 0.8e-3, 0.2e-3).empty());
+}
+
+// Fibers tiny against the section: the lattice at their touching spacing has billions of sites;
+// the packing starts from a spacing near the one it finds and takes as long as for thick fibers.
+// The spacing falls with the radius by about 2.1 radii (the fibers kept inside the ellipse):
+// 1e-9 m and 1e-12 m give it within 3e-9 m, and 2e-6 m (whose touching lattice, 9e3 sites, is
+// listed as before) within 6e-6 m.
+TEST(Packing, TinyFibersArePackedAtOnce) {
+  const double width = 0.8e-3, thickness = 0.2e-3;
+  for (const int n : {3, 7, 48}) {
+    const auto closest = [&](double r) {
+      const auto start = std::chrono::steady_clock::now();
+      const std::vector<Eigen::Vector2d> p = pack_ellipse(n, r, width, thickness);
+      EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 10.0) << r;
+      EXPECT_EQ(static_cast<int>(p.size()), n) << r;
+      double d = 1e300;
+      for (size_t i = 0; i < p.size(); ++i) {
+        EXPECT_LE(std::pow(p[i].x() / (0.5 * width - r), 2) + std::pow(p[i].y() / (0.5 * thickness - r), 2), 1.0);
+        for (size_t j = i + 1; j < p.size(); ++j) d = std::min(d, (p[i] - p[j]).norm());
+      }
+      return d;
+    };
+    SCOPED_TRACE(n);
+    const double tiny = closest(1e-9), tinier = closest(1e-12), thin = closest(2e-6);
+    EXPECT_GT(tiny, 5e-5);
+    EXPECT_NEAR(tiny, tinier, 3e-9);
+    EXPECT_GT(tiny, thin);
+    EXPECT_NEAR(tiny, thin, 6e-6);
+  }
+}
+
+// The size read_case checks before expanding is that of the expansion: fibers, their elements
+// (the fewest not longer than the element length, at least 2) and bodies.
+TEST(FabricExpansion, SizeBeforeExpandingIsTheExpansions) {
+  for (const double element_length : {2.0e-4, 3.0e-4, 1.0, 1.0e-6}) {
+    Case c = parse_case_toml(R"(
+[[material]]
+name = "glass"
+young = 72e9
+poisson = 0.22
+[fabric]
+pattern = "twill 2/1"
+warp = { tows = 3, spacing = 1.0e-3 }
+weft = { tows = 4, spacing = 1.2e-3, tow = { fibers = 5 } }
+  [fabric.tow]
+  fibers = 7
+  width = 0.7e-3
+  thickness = 0.25e-3
+  [fabric.fiber]
+  radius = 5.0e-5
+  material = "glass"
+  element_length = 1
+[[step]]
+name = "weave"
+kind = "weave"
+)", "fabric.toml");
+    c.fabric->warp.fiber.element_length = c.fabric->weft.fiber.element_length = element_length;
+    c.fibers.clear();
+    c.bodies.clear();
+    c.bindings.clear();
+    c.tows.clear();
+    const ModelSize size = fabric_size(*c.fabric);
+    expand_fabric(c);
+    SCOPED_TRACE(element_length);
+    // Warps span the 4 wefts (3 x 1.2 mm) plus two margins of 0.6 mm; wefts 2 x 1 mm + 1.2 mm.
+    EXPECT_NEAR(fabric_fiber_length(*c.fabric, true), 4.8e-3, 1e-15);
+    EXPECT_NEAR(fabric_fiber_length(*c.fabric, false), 3.2e-3, 1e-15);
+    double elements = 0;
+    for (const FiberSpec& f : c.fibers) {
+      const bool warp = f.name.rfind("warp", 0) == 0;
+      EXPECT_EQ(f.elements, fabric_fiber_elements(*c.fabric, warp)) << f.name;
+      EXPECT_EQ(f.elements, std::max(2.0, std::ceil((warp ? 4.8e-3 : 3.2e-3) / element_length - 1e-6))) << f.name;
+      elements += f.elements;
+    }
+    EXPECT_EQ(size.fibers, static_cast<double>(c.fibers.size()));
+    EXPECT_EQ(size.fibers, 3 * 7 + 4 * 5);
+    EXPECT_EQ(size.elements, elements);
+    EXPECT_EQ(size.bodies, static_cast<double>(c.bodies.size()));
+  }
+}
+
+// A count beyond an int is stopped before its conversion, also when the case was not read.
+TEST(FabricExpansion, ElementCountBeyondAnIntIsAnInputError) {
+  // Warp fibers of 1 mm + 2 margins of 0.9 mm: 2.8e9 elements of a picometre.
+  Case c = parse_case_toml(
+      test::glass_fabric("plain", 2, 3, 2e-5, 1e-4, "", "[[step]]\nname = \"weave\"\nkind = \"weave\"\n", 0.9e-3),
+      "fabric.toml");
+  c.fibers.clear();
+  c.bodies.clear();
+  c.bindings.clear();
+  c.tows.clear();
+  c.fabric->warp.fiber.element_length = 1e-12;
+  try {
+    expand_fabric(c);
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "fabric.warp.fiber.element_length");
+    EXPECT_NE(std::string(e.what()).find("into 2.8e+09 elements each, more than an int holds"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(FabricExpansion, TowsBodiesAndBindings) {

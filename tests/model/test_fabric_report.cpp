@@ -1,8 +1,9 @@
 // The fabric report (model/fabric_report.hpp) against geometry built by hand, not simulated:
 // straight tows (no crimp, the packed section), a sinusoidal tow (crimp against the elliptic
-// integral, computed here by fine quadrature), lenticular and elliptical cuts, a 2 x 2 weave
-// placed by hand (thickness, margins excluded, shrinkage), and penetration from given contact
-// responses. Areas of the grown convex hulls are computed here independently, from the
+// integral, computed here by fine quadrature), crimp along each tow's own mean line (straight
+// tows turned in the plane, sine waves in any direction and sheared, never negative),
+// lenticular and elliptical cuts, a 2 x 2 weave placed by hand (thickness, margins excluded,
+// shrinkage), and penetration from given contact responses. Areas of the grown convex hulls are computed here independently, from the
 // support function of the fiber centres.
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -213,6 +214,167 @@ TEST(FabricReport, SinusoidalTowCrimpMatchesTheEllipticIntegral) {
     EXPECT_NEAR(w.mid.position, 0.5 * period, 1e-15);
     // The mid-section cuts the fibers where the sinusoid crosses zero: all at z = 0.
     EXPECT_NEAR(w.mid.center_z, 0.0, 1e-3 * amp);
+  }
+}
+
+// Crimp is measured along each tow's own mean line: straight tows turned in the fabric plane
+// have none, whatever the angle, and report the angle they are turned by; the whole sample
+// turned, or only its wefts (as a shear turns them).
+TEST(FabricReport, StraightTowsTurnedInThePlaneHaveNoCrimp) {
+  const double r = 2e-5, s = 1e-3;
+  const std::vector<Eigen::Vector2d> sites = pack_ellipse(7, r, 0.4e-3, 0.1e-3);
+  Case c = base_case();
+  add_straight_tow(c, "warp0", TowSpec::Direction::Warp, 0, -0.5 * s, sites, r, 1.5 * s, 12);
+  add_straight_tow(c, "warp1", TowSpec::Direction::Warp, 1, 0.5 * s, sites, r, 1.5 * s, 12);
+  add_straight_tow(c, "weft0", TowSpec::Direction::Weft, 0, -0.5 * s, sites, r, 1.5 * s, 12);
+  add_straight_tow(c, "weft1", TowSpec::Direction::Weft, 1, 0.5 * s, sites, r, 1.5 * s, 12);
+  const Model model = build_model(c);
+  const auto turn = [](double a, const Vec3& x) {
+    return Vec3(std::cos(a) * x.x() - std::sin(a) * x.y(), std::sin(a) * x.x() + std::cos(a) * x.y(), x.z());
+  };
+  for (const double deg : {15.0, 45.0, -30.0}) {
+    const double a = deg * kPi / 180;
+    for (const bool wefts_only : {false, true}) {
+      SCOPED_TRACE(std::to_string(deg) + (wefts_only ? " deg, wefts only" : " deg, the whole sample"));
+      VecX q = model.reference;
+      map_nodes(model, q, [&](const Vec3& x, const Fiber& f) {
+        return wefts_only && f.name[1] == 'a' ? x : turn(a, x);  // "warp...": unturned
+      });
+      const FabricReport rep = fabric_report(c, model, q);
+      ASSERT_EQ(rep.tows.size(), 4u);
+      for (const TowReport& t : rep.tows) {
+        const bool turned = !wefts_only || t.direction == TowSpec::Direction::Weft;
+        EXPECT_NEAR(t.crimp, 0.0, 1e-14) << t.name;
+        EXPECT_NEAR(t.angle, turned ? a : 0.0, 1e-14) << t.name;
+      }
+      EXPECT_NEAR(rep.warp_crimp, 0.0, 1e-14);
+      EXPECT_NEAR(rep.weft_crimp, 0.0, 1e-14);
+    }
+  }
+}
+
+/// A sample of 2 warps and 2 wefts, 3 fibers side by side in each, crossing at right angles in
+/// the fabric plane; every fiber on z = +-A sin(2 pi u / L) along its tow (u from the first
+/// crossing), with 2 periods between the warps' crossings and 1 between the wefts'; margins
+/// of 0.25 mm beyond (nodes fall on the crossings). `place` then moves every node (x, y, z) of
+/// the flat layout.
+struct SineSample {
+  static constexpr double r = 1e-5, amp_warp = 0.05e-3, amp_weft = 0.04e-3;
+  static constexpr double period_warp = 1.0e-3, period_weft = 0.8e-3, margin = 0.25e-3;
+  static constexpr int per_period = 64;
+  Case c;
+  Model model;
+  SineSample() : c(base_case()) {
+    const double lw = 2 * period_warp, lf = period_weft;  // crossing ranges: wefts at x = 0, lw; warps at y = 0, lf
+    for (int j = 0; j < 2; ++j) {
+      std::vector<std::string> warp, weft;
+      for (int k = 0; k < 3; ++k) {
+        const double offset = (k - 1) * 3 * r;
+        const std::string wn = "warp" + std::to_string(j) + ".f" + std::to_string(k);
+        const std::string fn = "weft" + std::to_string(j) + ".f" + std::to_string(k);
+        add_fiber(c, wn, Vec3(-margin, j * lf + offset, 0), Vec3(lw + margin, j * lf + offset, 0), r,
+                  static_cast<int>(std::lround(per_period * (lw + 2 * margin) / period_warp)));
+        add_fiber(c, fn, Vec3(j * lw + offset, -margin, 0), Vec3(j * lw + offset, lf + margin, 0), r,
+                  static_cast<int>(std::lround(per_period * (lf + 2 * margin) / period_weft)));
+        warp.push_back(wn);
+        weft.push_back(fn);
+      }
+      add_tow(c, "warp" + std::to_string(j), TowSpec::Direction::Warp, j, warp);
+      add_tow(c, "weft" + std::to_string(j), TowSpec::Direction::Weft, j, weft);
+    }
+    model = build_model(c);
+  }
+  /// The waved layout, then `place` applied to each node.
+  VecX state(const std::function<Vec3(const Vec3&)>& place) const {
+    VecX q = model.reference;
+    map_nodes(model, q, [&](const Vec3& x, const Fiber& f) {
+      const bool warp = f.name[1] == 'a';
+      const double z = warp ? amp_warp * std::sin(2 * kPi * x.x() / period_warp)
+                            : -amp_weft * std::sin(2 * kPi * x.y() / period_weft);
+      return place(Vec3(x.x(), x.y(), z));
+    });
+    return q;
+  }
+};
+
+// A sine wave of known amplitude and period gives the arc length of the sine over its period
+// - 1, computed here by quadrature, in any direction of the fabric plane: the sample turned
+// about z.
+TEST(FabricReport, SineTowsGiveTheirCrimpInAnyDirection) {
+  const SineSample sample;
+  const double warp_exact = sinusoid_crimp(SineSample::amp_warp, SineSample::period_warp);
+  const double weft_exact = sinusoid_crimp(SineSample::amp_weft, SineSample::period_weft);
+  ASSERT_GT(warp_exact, 0.02);
+  ASSERT_GT(weft_exact, 0.02);
+  for (const double deg : {0.0, 15.0, 45.0, 120.0, -75.0}) {
+    SCOPED_TRACE(std::to_string(deg) + " deg");
+    const double a = deg * kPi / 180;
+    const FabricReport rep = fabric_report(sample.c, sample.model, sample.state([&](const Vec3& x) {
+      return Vec3(std::cos(a) * x.x() - std::sin(a) * x.y(), std::sin(a) * x.x() + std::cos(a) * x.y(), x.z());
+    }));
+    ASSERT_EQ(rep.tows.size(), 4u);
+    for (const TowReport& t : rep.tows) {
+      const bool warp = t.direction == TowSpec::Direction::Warp;
+      // 64 quadratic elements per period: the interpolation leaves about 1e-9.
+      EXPECT_NEAR(t.crimp, warp ? warp_exact : weft_exact, 1e-8) << t.name;
+    }
+    EXPECT_NEAR(rep.warp_crimp, warp_exact, 1e-8);
+    EXPECT_NEAR(rep.weft_crimp, weft_exact, 1e-8);
+  }
+}
+
+// The same sine waves sheared as a picture frame shears them: the wefts turned by the angle,
+// the warps moved closer (y cos g) without turning, every tow keeping its length and its
+// crossings. The crimp of every tow stays, to round-off, and the wefts report the angle; with
+// the crimp along the fixed axis (y) a weft would have gained 1/cos(g) - 1 (3.5 % at 15 deg).
+TEST(FabricReport, ShearedSineTowsKeepTheirCrimp) {
+  const SineSample sample;
+  const FabricReport flat = fabric_report(sample.c, sample.model, sample.state([](const Vec3& x) { return x; }));
+  for (const double deg : {15.0, 30.0, -25.0}) {
+    SCOPED_TRACE(std::to_string(deg) + " deg");
+    const double g = deg * kPi / 180;
+    const FabricReport sheared = fabric_report(sample.c, sample.model, sample.state([&](const Vec3& x) {
+      return Vec3(x.x() - x.y() * std::sin(g), x.y() * std::cos(g), x.z());
+    }));
+    ASSERT_EQ(sheared.tows.size(), flat.tows.size());
+    for (size_t t = 0; t < flat.tows.size(); ++t) {
+      const bool weft = flat.tows[t].direction == TowSpec::Direction::Weft;
+      EXPECT_GT(flat.tows[t].crimp, 0.02);
+      EXPECT_NEAR(sheared.tows[t].crimp, flat.tows[t].crimp, 1e-13) << flat.tows[t].name;
+      EXPECT_NEAR(sheared.tows[t].angle, weft ? g : 0.0, 1e-13) << flat.tows[t].name;
+    }
+    EXPECT_NEAR(sheared.weft_crimp, flat.weft_crimp, 1e-13);
+    EXPECT_NEAR(sheared.warp_crimp, flat.warp_crimp, 1e-13);
+  }
+}
+
+// Crimp is never negative: a fiber that does not span the tow's woven range is measured over
+// the projection of what it has there, and fibers bent back and forth in the plane or out of
+// it are longer than their projection.
+TEST(FabricReport, CrimpIsNeverNegative) {
+  const SineSample sample;
+  for (const double deg : {0.0, 20.0}) {
+    const double g = deg * kPi / 180;
+    VecX q = sample.state([&](const Vec3& x) { return Vec3(x.x() - x.y() * std::sin(g), x.y() * std::cos(g), x.z()); });
+    // Shorten one warp fiber to half the woven range (its nodes beyond it pulled back onto it)
+    // and wave another in the plane.
+    for (const Fiber& f : sample.model.fibers)
+      for (Index k = 0; k < f.num_nodes; ++k) {
+        Vec3 x = q.segment<3>(9 * (f.first_node + k));
+        const Vec3 x0 = sample.model.reference.segment<3>(9 * (f.first_node + k));
+        if (f.name == "warp0.f0" && x0.x() > SineSample::period_warp) x = q.segment<3>(9 * (f.first_node + k - 1));
+        if (f.name == "warp1.f2") x.y() += 0.1e-3 * std::sin(6 * kPi * x0.x() / SineSample::period_warp);
+        q.segment<3>(9 * (f.first_node + k)) = x;
+      }
+    // Without the out-of-plane waves: the in-plane one alone still gives a positive crimp.
+    VecX flat = q;
+    for (Index k = 0; k < sample.model.num_nodes(); ++k) flat[9 * k + 2] = 0.0;
+    for (const VecX* state : {&q, &flat}) {
+      const FabricReport rep = fabric_report(sample.c, sample.model, *state);
+      for (const TowReport& t : rep.tows) EXPECT_GE(t.crimp, 0.0) << t.name << " at " << deg << " deg";
+      ASSERT_EQ(rep.tows[2].name, "warp1");
+      EXPECT_GT(rep.tows[2].crimp, 0.1);  // one fiber of three waving in the plane
+    }
   }
 }
 
@@ -450,6 +612,7 @@ TEST(FabricReport, JsonHoldsEveryQuantity) {
   EXPECT_EQ(t["name"], "warp0");
   EXPECT_EQ(t["direction"], "warp");
   EXPECT_NEAR(t["crimp"].get<double>(), 0.0, 1e-13);
+  EXPECT_NEAR(t["angle"].get<double>(), 0.0, 1e-15);
   for (const char* key : {"position", "fibers", "width", "thickness", "area", "volume_fraction", "center_z", "tilt"}) {
     EXPECT_TRUE(t["mid_section"].contains(key)) << key;
     EXPECT_TRUE(t["crossing_section"].contains(key)) << key;

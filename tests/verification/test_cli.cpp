@@ -417,6 +417,38 @@ TEST_F(Cli, GenerateOfABadCaseIsAnInputError) {
   EXPECT_NE(r.err.find("missing.toml"), std::string::npos) << r.err;
 }
 
+// A model too large is refused while the case is read, by check, run and generate alike: exit
+// code 2, the file, the key and the estimated size, no output directory.
+TEST_F(Cli, ModelsTooLargeAreRefusedWithTheKeyAndTheSize) {
+  write("huge.toml", replace(kGood, "elements = 4", "elements = 2000000000"));
+  for (const std::string command : {"check huge.toml", "run huge.toml --out huge_out"}) {
+    const Result r = fibra(command);
+    EXPECT_EQ(r.code, 2) << command << ": " << r.err;
+    EXPECT_NE(r.err.find("error: huge.toml: fiber[0].elements: 2000000000 elements make a model too large to run: "
+                         "estimated 2e+09 elements, 4e+09 nodes, 3.6e+10 dofs, 6.66e+11 stiffness matrix entries "
+                         "and at least "),
+              std::string::npos)
+        << command << ": " << r.err;
+    EXPECT_NE(r.err.find("(32-bit indices)"), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(m_dir / "huge_out"));
+
+  // A fabric's element length of a picometre: 6 warp fibers of 2 mm in 2e9 elements each.
+  write("pico.toml", replace(kSmallFabric, "element_length = 1.0e-3", "element_length = 1e-12"));
+  for (const std::string command : {"check pico.toml", "run pico.toml --out pico_out", "generate pico.toml"}) {
+    const Result r = fibra(command);
+    EXPECT_EQ(r.code, 2) << command << ": " << r.err;
+    EXPECT_NE(r.err.find("error: pico.toml: fabric.fiber.element_length: 1e-12 m cuts each of the 6 warp fibers "
+                         "(0.002 m long) into 2e+09 elements: a model too large to run: estimated 2.4e+10 elements"),
+              std::string::npos)
+        << command << ": " << r.err;
+    EXPECT_NE(r.err.find("TiB of memory"), std::string::npos) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(m_dir / "pico_out"));
+  EXPECT_FALSE(fs::exists(m_dir / "pico_generated"));
+}
+
 /// Two cantilevers along x (tows "A" warp and "B" weft), bent down by a tip load.
 const std::string kTwoBeams = R"(
 title = "Two beams"

@@ -348,7 +348,8 @@ const Keys kWeaveWords = {"plain", "twill", "basket", "satin"};
 
 class Reader {
  public:
-  Reader(std::string file, bool json) : m_file(std::move(file)), m_json(json) {}
+  Reader(std::string file, bool json, SizeLimits limits)
+      : m_file(std::move(file)), m_json(json), m_limits(limits) {}
 
   Case read(const Value& root) const;
 
@@ -667,8 +668,14 @@ class Reader {
   OutputSpec read_output(const Value& t, const std::string& path) const;
   ContactSpec read_contact(const Value& t, const std::string& path) const;
 
+  /// Refuses the model of a [fabric] (table `t` at `path`, read into `f`) when its estimated size
+  /// exceeds the limits, before it is expanded, naming the key that makes it large: the element
+  /// length when the same fibers in 2 elements each would fit, else the tow or fiber count.
+  void check_fabric_size(const Value& t, const std::string& path, const FabricSpec& f) const;
+
   std::string m_file;
   bool m_json;
+  SizeLimits m_limits;
 };
 
 MaterialSpec Reader::read_material(const Value& t, const std::string& path) const {
@@ -860,7 +867,11 @@ FiberSpec Reader::read_fiber(const Value& t, const std::string& path,
     f.section_direction = d;
   }
 
-  f.elements = to_int(require(t, path, "elements", "an integer >= 1"), join(path, "elements"), 1);
+  const std::string elements_key = join(path, "elements");
+  const Value& elements = require(t, path, "elements", "an integer >= 1");
+  f.elements = to_int(elements, elements_key, 1);
+  if (const std::string why = size_excess(fiber_size(f.elements), m_limits); !why.empty())
+    fail(elements_key, fmt::format("{} elements make a model too large to run: {}", f.elements, why), &elements);
   return f;
 }
 
@@ -1553,6 +1564,52 @@ FabricSpec Reader::read_fabric(const Value& t, const std::string& path,
   return f;
 }
 
+void Reader::check_fabric_size(const Value& t, const std::string& path, const FabricSpec& f) const {
+  const ModelSize size = fabric_size(f);
+  const std::string why = size_excess(size, m_limits);
+  if (why.empty()) return;
+  // Where direction `dir` took `key` of `table` from: its own table, else the shared one.
+  struct Source {
+    std::string key;
+    const Value* value;
+  };
+  const auto source = [&](const char* dir, const char* table, const char* key) {
+    const std::string own_path = join(join(path, dir), table);
+    if (const Value* d = find(t, dir))
+      if (const Value* own = find(*d, table))
+        if (const Value* v = find(*own, key)) return Source{join(own_path, key), v};
+    const Value* shared = find(t, table);
+    return Source{join(join(path, table), key), shared != nullptr ? find(*shared, key) : nullptr};
+  };
+  const char* names[2] = {"warp", "weft"};
+  const FabricDirectionSpec* dirs[2] = {&f.warp, &f.weft};
+  double fibers[2], elements[2];
+  for (int k = 0; k < 2; ++k) {
+    fibers[k] = static_cast<double>(dirs[k]->tows) * static_cast<double>(dirs[k]->tow.fibers);
+    elements[k] = fabric_fiber_elements(f, k == 0);
+  }
+  ModelSize coarse = size;
+  coarse.elements = 2 * (fibers[0] + fibers[1]);
+  if (size_excess(coarse, m_limits).empty()) {
+    const int k = fibers[1] * elements[1] > fibers[0] * elements[0] ? 1 : 0;
+    const Source s = source(names[k], "fiber", "element_length");
+    fail(s.key,
+         fmt::format("{:.6g} m cuts each of the {:.6g} {} fibers ({:.6g} m long) into {:.6g} elements: a model too "
+                     "large to run: {}",
+                     dirs[k]->fiber.element_length, fibers[k], names[k], fabric_fiber_length(f, k == 0), elements[k],
+                     why),
+         s.value);
+  }
+  const int k = fibers[1] > fibers[0] ? 1 : 0;
+  const Source s = dirs[k]->tows >= dirs[k]->tow.fibers
+                       ? Source{join(join(path, names[k]), "tows"), find(*find(t, names[k]), "tows")}
+                       : source(names[k], "tow", "fibers");
+  fail(s.key,
+       fmt::format("{} tows of {} fibers make {:.6g} {} fibers: a model too large to run: {}", dirs[k]->tows,
+                   dirs[k]->tow.fibers, fibers[k], names[k], why),
+       s.value);
+}
+
 TowSpec Reader::read_tow(const Value& t, const std::string& path, const std::vector<FiberSpec>& fibers,
                          const std::vector<TowSpec>& earlier, std::size_t generated) const {
   check_keys(t, path, {"name", "direction", "index", "fibers"});
@@ -1833,7 +1890,7 @@ Case Reader::read_continued(const Value& root, const Value& start) const {
          &from_value);
   // The earlier run's model as it ran (its case.toml: a fabric expanded into fibers, bodies and
   // tows); its errors name that file.
-  Case c = read_case((dir / "case.toml").string());
+  Case c = read_case((dir / "case.toml").string(), m_limits);
   c.start = dir.string();
   // The state: at the end of the step named, or of the last step that ended.
   const auto state_of = [&](const std::string& step) { return dir / "state" / (step_file_stem(step) + ".bin"); };
@@ -1896,7 +1953,10 @@ Case Reader::read(const Value& root) const {
   }
 
   // A woven fabric (optional), expanded into fibers, bodies, bindings and tows below.
-  if (const Value* v = find(root, "fabric")) c.fabric = read_fabric(*v, "fabric", c.materials);
+  if (const Value* v = find(root, "fabric")) {
+    c.fabric = read_fabric(*v, "fabric", c.materials);
+    check_fabric_size(*v, "fabric", *c.fabric);
+  }
   const std::string fabric_word = m_json ? "a fabric object" : "a [fabric]";
 
   // Fibers: at least one, unless a [fabric] makes them.
@@ -1938,6 +1998,25 @@ Case Reader::read(const Value& root) const {
         }
       }
       c.bodies.push_back(std::move(b));
+    }
+  }
+
+  // The whole model, the file's fibers and bodies with the fabric's, before the fabric is
+  // expanded below.
+  {
+    ModelSize own;
+    for (const FiberSpec& f : c.fibers) own += fiber_size(f.elements);
+    own.bodies = static_cast<double>(c.bodies.size());
+    const ModelSize fabric = c.fabric ? fabric_size(*c.fabric) : ModelSize{};
+    ModelSize size = own;
+    size += fabric;
+    if (const std::string why = size_excess(size, m_limits); !why.empty()) {
+      const bool fibers = !c.fibers.empty();
+      fail(fibers ? "fiber" : "body",
+           fmt::format("the {} {} of the file ({:.6g} elements in all{}) make a model too large to run: {}",
+                       fibers ? c.fibers.size() : c.bodies.size(), fibers ? "fibers" : "bodies", own.elements,
+                       c.fabric ? fmt::format(", with the fabric's {:.6g}", fabric.elements) : std::string(), why),
+           fibers ? fiber_value : find(root, "body"));
     }
   }
 
@@ -2038,8 +2117,8 @@ Case Reader::read(const Value& root) const {
 }
 
 /// Validates `root` and fills in the file and name of the case.
-Case finish(const Value& root, const std::string& file_label, bool json) {
-  Case c = Reader(file_label, json).read(root);
+Case finish(const Value& root, const std::string& file_label, bool json, const SizeLimits& limits) {
+  Case c = Reader(file_label, json, limits).read(root);
   c.file = file_label;
   c.name = std::filesystem::path(file_label).stem().string();
   return c;
@@ -2065,7 +2144,7 @@ std::string read_text(const std::string& path) {
 
 }  // namespace
 
-Case parse_case_toml(const std::string& text, const std::string& file_label) {
+Case parse_case_toml(const std::string& text, const std::string& file_label, const SizeLimits& limits) {
   toml::table table;
   try {
     table = toml::parse(text, std::string_view(file_label));
@@ -2075,10 +2154,10 @@ Case parse_case_toml(const std::string& text, const std::string& file_label) {
                      fmt::format("TOML syntax error at line {}, column {}: {}", begin.line,
                                  begin.column, e.description()));
   }
-  return finish(from_toml(table), file_label, false);
+  return finish(from_toml(table), file_label, false, limits);
 }
 
-Case parse_case_json(const std::string& text, const std::string& file_label) {
+Case parse_case_json(const std::string& text, const std::string& file_label, const SizeLimits& limits) {
   JsonBuilder builder;
   if (!nlohmann::json::sax_parse(text, &builder)) {
     const std::string key = builder.error_key().empty() ? "(file)" : builder.error_key();
@@ -2088,10 +2167,10 @@ Case parse_case_json(const std::string& text, const std::string& file_label) {
   if (builder.root().type != Value::Type::Table) {
     throw InputError(file_label, "(file)", "expected a JSON object at the top level");
   }
-  return finish(builder.root(), file_label, true);
+  return finish(builder.root(), file_label, true, limits);
 }
 
-Case read_case(const std::string& path) {
+Case read_case(const std::string& path, const SizeLimits& limits) {
   const std::string extension = lowercase(std::filesystem::path(path).extension().string());
   if (extension != ".toml" && extension != ".json") {
     throw InputError(path, "(file)",
@@ -2099,7 +2178,7 @@ Case read_case(const std::string& path) {
                                  extension));
   }
   const std::string text = read_text(path);
-  return extension == ".toml" ? parse_case_toml(text, path) : parse_case_json(text, path);
+  return extension == ".toml" ? parse_case_toml(text, path, limits) : parse_case_json(text, path, limits);
 }
 
 }  // namespace fibra

@@ -4,19 +4,24 @@
 /// path (e.g. `fiber[1].radius`, `step[0].load[2].force`) and what was expected. A [fabric]
 /// is expanded (expand_fabric, model/fabric.hpp): the case holds its generated fibers, bodies,
 /// bindings, tows, weave and edge conditions after those of the file, which may refer to them.
+/// A model whose estimated size exceeds `limits` (model/model_size.hpp) is refused before
+/// anything of that size is made, naming the key that sets the size.
 #include <string>
 
 #include "fibra/model/case.hpp"
+#include "fibra/model/model_size.hpp"
 
 namespace fibra {
 
 /// Reads and validates the case file at `path`; ".toml" or ".json" selects the format.
-Case read_case(const std::string& path);
+Case read_case(const std::string& path, const SizeLimits& limits = machine_size_limits());
 
 /// Parses and validates a TOML case held in `text`; `file_label` stands for the file name.
-Case parse_case_toml(const std::string& text, const std::string& file_label);
+Case parse_case_toml(const std::string& text, const std::string& file_label,
+                     const SizeLimits& limits = machine_size_limits());
 
 /// Parses and validates a JSON case held in `text`; `file_label` stands for the file name.
-Case parse_case_json(const std::string& text, const std::string& file_label);
+Case parse_case_json(const std::string& text, const std::string& file_label,
+                     const SizeLimits& limits = machine_size_limits());
 
 }  // namespace fibra

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <climits>
 #include <cmath>
 #include <numbers>
 #include <numeric>
@@ -181,9 +182,25 @@ std::vector<Eigen::Vector2d> pack_ellipse(int count, double r, double width, dou
     }
     return {};
   };
-  if (best_for(2.0 * r).empty()) return {};
+  // The bisection below starts from a spacing that holds them: 2r (touching) unless that
+  // lattice has too many sites to list (a fiber tiny against the section: 1e-9 m fibers in a
+  // 0.8 x 0.2 mm tow make 5e10). Then it starts from a spacing whose lattice holds about 4
+  // times the count (the area over the area per site), halved while it does not hold them.
+  const auto sites_at = [&](double d) { return std::numbers::pi * a * b / (d * d * std::sqrt(3.0) / 2.0); };
+  const double most_sites = std::max(1e5, 64.0 * count);
+  double lo = 2.0 * r;
+  bool holds = false;
+  if (sites_at(lo) > most_sites) {
+    double d = std::sqrt(std::numbers::pi * a * b / (4.0 * count * std::sqrt(3.0) / 2.0));
+    for (int k = 0; k < 3 && d > lo && sites_at(d) <= most_sites && !holds; ++k) {
+      holds = !best_for(d).empty();
+      if (!holds) d *= 0.5;
+    }
+    if (holds) lo = d;
+  }
+  if (!holds && best_for(lo).empty()) return {};
   // Largest spacing that still holds them (bisection; the count falls with the spacing).
-  double lo = 2.0 * r, hi = 2.0 * std::max(a, b) + 2.0 * r;
+  double hi = 2.0 * std::max(a, b) + 2.0 * r;
   for (int it = 0; it < 60; ++it) {
     const double mid = 0.5 * (lo + hi);
     if (best_for(mid).empty())
@@ -193,6 +210,32 @@ std::vector<Eigen::Vector2d> pack_ellipse(int count, double r, double width, dou
   }
   // Sites are symmetric only approximately; the tow-end bodies sit at the actual centroid.
   return best_for(lo);
+}
+
+double fabric_fiber_length(const FabricSpec& f, bool warp) {
+  // As expand_fabric places the tows: the other direction's outer axes plus the margins.
+  const FabricDirectionSpec& other = warp ? f.weft : f.warp;
+  const double n = other.tows;
+  const double first = (0 - 0.5 * (n - 1)) * other.spacing, last = (n - 1 - 0.5 * (n - 1)) * other.spacing;
+  return (last + f.margin) - (first - f.margin);
+}
+
+double fabric_fiber_elements(const FabricSpec& f, bool warp) {
+  const double element_length = (warp ? f.warp : f.weft).fiber.element_length;
+  return std::max(2.0, std::ceil(fabric_fiber_length(f, warp) / element_length - 1e-9));
+}
+
+ModelSize fabric_size(const FabricSpec& f) {
+  ModelSize size;
+  for (const bool warp : {true, false}) {
+    const FabricDirectionSpec& d = warp ? f.warp : f.weft;
+    const double fibers = static_cast<double>(d.tows) * static_cast<double>(d.tow.fibers);
+    size.fibers += fibers;
+    size.elements += fibers * fabric_fiber_elements(f, warp);
+    size.bodies += 2.0 * d.tows;
+  }
+  size.bodies += 4;
+  return size;
 }
 
 void expand_fabric(Case& c) {
@@ -250,8 +293,15 @@ void expand_fabric(Case& c) {
     const Direction& d = dirs[dir];
     const FabricDirectionSpec& s = *d.spec;
     const int tows = dir == 0 ? nw : nf;
-    const double length = dir == 0 ? x1 - x0 : y1 - y0;
-    const int elements = std::max(2, static_cast<int>(std::ceil(length / s.fiber.element_length - 1e-9)));
+    // The count as a real first: read_case refuses a fabric too large with its size; here only
+    // a count no int holds is stopped before it is converted.
+    const double count = fabric_fiber_elements(f, dir == 0);
+    if (!(count <= INT_MAX))
+      throw InputError(file, fmt::format("fabric.{}.fiber.element_length", d.name),
+                       fmt::format("{:.6g} m cuts the {} fibers ({:.6g} m long) into {:.3g} elements each, more than "
+                                   "an int holds ({})",
+                                   s.fiber.element_length, d.name, fabric_fiber_length(f, dir == 0), count, INT_MAX));
+    const int elements = static_cast<int>(count);
     for (int t = 0; t < tows; ++t) {
       TowSpec tow;
       tow.name = fmt::format("{}{}", d.name, t);

@@ -10,6 +10,7 @@
 
 #include "fibra/core/types.hpp"
 #include "fibra/model/case.hpp"
+#include "fibra/model/model_size.hpp"
 
 namespace fibra {
 
@@ -36,6 +37,19 @@ inline bool warp_above(const std::vector<std::vector<int>>& matrix, int i, int j
 /// holds them, the `count` lattice sites nearest the centre (elliptic distance). Returns an
 /// empty vector when they do not fit even touching.
 std::vector<Eigen::Vector2d> pack_ellipse(int count, double r, double width, double thickness);
+
+/// Length of every generated fiber of the warp (`warp` true) or the weft: from the first to the
+/// last tow of the other direction plus a margin at each end [m].
+double fabric_fiber_length(const FabricSpec& f, bool warp);
+
+/// Elements of every generated fiber of the warp or the weft: the fewest not longer than the
+/// element length, ceil(length / element_length), at least 2. A real, so that a count no
+/// integer holds is reported instead of overflowing (read_case refuses such a fabric).
+double fabric_fiber_elements(const FabricSpec& f, bool warp);
+
+/// The size of the model a fabric generates: its fibers, their elements, and its bodies (two
+/// per tow and four edges). Computed from the spec alone, before anything is expanded.
+ModelSize fabric_size(const FabricSpec& f);
 
 /// Expands c.fabric (if any) into fibers, bodies, bindings, tows and the weave matrix, and
 /// adds the edges' boundary conditions to the first step; throws InputError (c.file,

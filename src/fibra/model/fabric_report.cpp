@@ -25,6 +25,20 @@ Curve element_curve(const Model& model, const VecX& q, Index element) {
   return {x1, 0.5 * (x2 - x0), 0.5 * (x0 - 2.0 * x1 + x2)};
 }
 
+/// A coordinate along an element's centroid line, u(eta) = c + b eta + a eta^2.
+struct Quadratic {
+  double a, b, c;
+  double at(double t) const { return c + t * (b + t * a); }
+};
+
+/// The coordinate x0(eta)[axis].
+Quadratic coordinate(const Curve& cu, int axis) { return {cu.c2[axis], cu.c1[axis], cu.c0[axis]}; }
+
+/// The coordinate (x0(eta) - origin) . d along the direction d.
+Quadratic coordinate(const Curve& cu, const Vec3& origin, const Vec3& d) {
+  return {cu.c2.dot(d), cu.c1.dot(d), (cu.c0 - origin).dot(d)};
+}
+
 /// Roots in [-1, 1] of a t^2 + b t + c = 0, ascending; returns their number.
 int roots_in_element(double a, double b, double c, double out[2]) {
   const double scale = std::abs(a) + std::abs(b) + std::abs(c);
@@ -53,14 +67,14 @@ int roots_in_element(double a, double b, double c, double out[2]) {
   return m;
 }
 
-/// The parts [t0, t1] of [-1, 1] where lo <= x0(eta)[axis] <= hi.
+/// The parts [t0, t1] of [-1, 1] where lo <= u(eta) <= hi.
 template <class Visit>
-void for_parts_in_range(const Curve& cu, int axis, double lo, double hi, Visit&& visit) {
+void for_parts_in_range(const Quadratic& u, double lo, double hi, Visit&& visit) {
   double breaks[6] = {-1.0, 1.0};
   int n = 2;
   for (double v : {lo, hi}) {
     double r[2];
-    const int k = roots_in_element(cu.c2[axis], cu.c1[axis], cu.c0[axis] - v, r);
+    const int k = roots_in_element(u.a, u.b, u.c - v, r);
     for (int i = 0; i < k; ++i) breaks[n++] = r[i];
   }
   for (int i = 1; i < n; ++i)  // insertion sort of at most 6 values
@@ -68,8 +82,8 @@ void for_parts_in_range(const Curve& cu, int axis, double lo, double hi, Visit&&
   for (int i = 0; i + 1 < n; ++i) {
     const double t0 = breaks[i], t1 = breaks[i + 1];
     if (t1 - t0 <= 1e-14) continue;
-    const double u = cu.at(0.5 * (t0 + t1))[axis];
-    if (u >= lo && u <= hi) visit(t0, t1);
+    const double mid = u.at(0.5 * (t0 + t1));
+    if (mid >= lo && mid <= hi) visit(t0, t1);
   }
 }
 
@@ -84,6 +98,41 @@ double arc_length(const Curve& cu, double t0, double t1) {
   double s = 0.0;
   for (int g = 0; g < 5; ++g) s += w[g] * cu.tangent(mid + half * x[g]).norm();
   return half * s;
+}
+
+/// Lowest and highest u(eta) over eta in [t0, t1].
+void extremes(const Quadratic& u, double t0, double t1, double& lo, double& hi) {
+  for (const double t : {t0, t1}) {
+    lo = std::min(lo, u.at(t));
+    hi = std::max(hi, u.at(t));
+  }
+  if (u.a != 0.0) {
+    const double t = -u.b / (2.0 * u.a);
+    if (t > t0 && t < t1) {
+      lo = std::min(lo, u.at(t));
+      hi = std::max(hi, u.at(t));
+    }
+  }
+}
+
+/// The direction in the fabric plane of the principal axis of a fiber's nodes' second moments
+/// (the line of least squared distances to them), oriented along `nominal` (+x or +y); zero
+/// when its nodes coincide.
+Eigen::Vector2d principal_direction(const std::vector<Eigen::Vector2d>& points, const Eigen::Vector2d& nominal) {
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& p : points) mean += p;
+  mean /= static_cast<double>(points.size());
+  double cxx = 0.0, cyy = 0.0, cxy = 0.0;
+  for (const auto& p : points) {
+    const Eigen::Vector2d d = p - mean;
+    cxx += d.x() * d.x();
+    cyy += d.y() * d.y();
+    cxy += d.x() * d.y();
+  }
+  if (cxx + cyy == 0.0) return Eigen::Vector2d::Zero();
+  const double angle = 0.5 * std::atan2(2.0 * cxy, cxx - cyy);
+  const Eigen::Vector2d d(std::cos(angle), std::sin(angle));
+  return d.dot(nominal) < 0.0 ? Eigen::Vector2d(-d) : d;
 }
 
 /// Lowest and highest z of the centroid line over eta in [t0, t1].
@@ -266,12 +315,14 @@ FabricReport fabric_report(const Case& c, const Model& model, const VecX& q,
   fiber_of.reserve(model.fibers.size());
   for (size_t i = 0; i < model.fibers.size(); ++i) fiber_of.emplace(model.fibers[i].name, static_cast<int>(i));
 
-  // Tows: their fibers, axis (0: x for warp, 1: y for weft) and the position of their axis
-  // across (mean over their nodes), now and in the reference state.
+  // Tows: their fibers, axis (0: x for warp, 1: y for weft), the position of their axis
+  // across (mean over their nodes) now and in the reference state, and their mean line in the
+  // fabric plane now (crimp is measured along it).
   struct Tow {
     std::vector<int> fibers;
     int axis = 0;
     double across = 0, across_ref = 0;
+    Eigen::Vector2d centre, direction;
   };
   std::vector<Tow> tows(c.tows.size());
   std::vector<double> axes[2], axes_ref[2];  // [0]: warp axes (y), [1]: weft axes (x)
@@ -293,6 +344,22 @@ FabricReport fabric_report(const Case& c, const Model& model, const VecX& q,
       }
       nodes += f.num_nodes;
     }
+    // The mean line: through the mean of the nodes, along the mean of the fibers' own directions.
+    // Each fiber's nodes give its direction, so that the ends of a tow cut obliquely (a sheared
+    // tow, its fibers' ends on the turned edge) do not tilt the line as the whole cloud's
+    // second moments would.
+    const Eigen::Vector2d nominal = warp ? Eigen::Vector2d::UnitX() : Eigen::Vector2d::UnitY();
+    Eigen::Vector2d centre = Eigen::Vector2d::Zero(), direction = Eigen::Vector2d::Zero();
+    std::vector<Eigen::Vector2d> points;
+    for (int fi : tw.fibers) {
+      const Fiber& f = model.fibers[fi];
+      points.clear();
+      for (Index k = 0; k < f.num_nodes; ++k) points.push_back(q.segment<2>(9 * (f.first_node + k)));
+      for (const auto& p : points) centre += p;
+      direction += principal_direction(points, nominal);
+    }
+    tw.centre = nodes > 0 ? Eigen::Vector2d(centre / static_cast<double>(nodes)) : Eigen::Vector2d::Constant(kNaN);
+    tw.direction = direction.norm() > 0.0 ? Eigen::Vector2d(direction.normalized()) : nominal;
     tw.across = nodes > 0 ? sum / static_cast<double>(nodes) : kNaN;
     tw.across_ref = nodes > 0 ? sum_ref / static_cast<double>(nodes) : kNaN;
     if (nodes > 0) {
@@ -328,24 +395,55 @@ FabricReport fabric_report(const Case& c, const Model& model, const VecX& q,
     tr.crimp = tr.z_amplitude = kNaN;
     const int across = 1 - tw.axis;
 
-    // Crimp and the fabric's thickness over the woven range [start, end].
-    if (m >= 2 && tr.end > tr.start) {
-      std::vector<double> crimps;
+    // The fabric's thickness over the woven range [start, end].
+    if (m >= 2 && tr.end > tr.start)
       for (int fi : tw.fibers) {
         const Fiber& f = model.fibers[fi];
         const double rad = fiber_radius(model, f);
-        double arc = 0.0;
         for (Index e = 0; e < f.num_elements; ++e) {
           const Curve cu = element_curve(model, q, f.first_element + e);
-          for_parts_in_range(cu, tw.axis, tr.start, tr.end, [&](double t0, double t1) {
-            arc += arc_length(cu, t0, t1);
+          for_parts_in_range(coordinate(cu, tw.axis), tr.start, tr.end, [&](double t0, double t1) {
             double a = std::numeric_limits<double>::infinity(), b = -a;
             z_extremes(cu, t0, t1, a, b);
             zlo = std::min(zlo, a - rad);
             zhi = std::max(zhi, b + rad);
           });
         }
-        crimps.push_back(arc / (tr.end - tr.start) - 1.0);
+      }
+
+    // Crimp, along the tow's own mean line: s = (x - centre) . direction. The crossings are where
+    // that line meets the mean lines of the tows of the other direction; each fiber is measured
+    // between the first and the last, its arc length over the length of its projection on the
+    // line (never shorter than the projection: the crimp is >= 0, and 0 for a straight fiber
+    // whatever its direction).
+    tr.angle = std::isnan(tw.centre.x()) ? kNaN
+                                         : std::atan2(tw.axis == 0 ? tw.direction.y() : -tw.direction.x(),
+                                                      tw.axis == 0 ? tw.direction.x() : tw.direction.y());
+    std::vector<double> along;
+    for (const Tow& other : tows) {
+      if (other.axis == tw.axis || std::isnan(other.centre.x()) || std::isnan(tw.centre.x())) continue;
+      const auto cross = [](const Eigen::Vector2d& u, const Eigen::Vector2d& v) { return u.x() * v.y() - u.y() * v.x(); };
+      const double sine = cross(tw.direction, other.direction);
+      if (std::abs(sine) < 1e-9) continue;  // parallel lines do not cross
+      along.push_back(cross(other.centre - tw.centre, other.direction) / sine);
+    }
+    if (along.size() >= 2) {
+      const auto [first, last] = std::minmax_element(along.begin(), along.end());
+      const Vec3 origin(tw.centre.x(), tw.centre.y(), 0.0), d(tw.direction.x(), tw.direction.y(), 0.0);
+      std::vector<double> crimps;
+      for (int fi : tw.fibers) {
+        const Fiber& f = model.fibers[fi];
+        double arc = 0.0, lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        for (Index e = 0; e < f.num_elements; ++e) {
+          const Curve cu = element_curve(model, q, f.first_element + e);
+          const Quadratic u = coordinate(cu, origin, d);
+          for_parts_in_range(u, *first, *last, [&](double t0, double t1) {
+            arc += arc_length(cu, t0, t1);
+            extremes(u, t0, t1, lo, hi);
+          });
+        }
+        // arc >= hi - lo exactly; the max takes out round-off on a straight fiber.
+        if (hi > lo) crimps.push_back(std::max(0.0, arc / (hi - lo) - 1.0));
       }
       tr.crimp = mean_finite(crimps);
     }
@@ -463,6 +561,7 @@ nlohmann::json to_json(const FabricReport& r) {
                     {"crossings", t.crossings},
                     {"woven_range", {num(t.start), num(t.end)}},
                     {"crimp", num(t.crimp)},
+                    {"angle", num(t.angle)},
                     {"z_amplitude", num(t.z_amplitude)},
                     {"mid_section", section(t.mid)},
                     {"crossing_section", section(t.crossing)}});

@@ -41,7 +41,12 @@ struct TowReport {
   double axis = 0;         ///< current position of the tow axis across (y of a warp, x of a weft) [m]
   int crossings = 0;       ///< crossing positions: axes of the tows of the other direction
   double start = 0, end = 0;  ///< woven range along the axis: first and last crossing [m]
-  double crimp = 0;        ///< mean over its fibers of arc length / (end - start) - 1 [-] (NaN: < 2 crossings)
+  /// Mean over its fibers of arc length / length of its projection on the tow's mean line - 1,
+  /// between the first and last crossings along that line [-] (NaN: fewer than 2 crossings).
+  double crimp = 0;
+  /// Angle of the tow's mean line in the fabric plane from its nominal axis (x for a warp, y for
+  /// a weft), counterclockwise about z, in [-pi/2, pi/2] [rad].
+  double angle = 0;
   double z_amplitude = 0;  ///< max - min over the woven range of the tow's mean centre z [m]
   TowSectionReport mid;       ///< half-way between the two middle crossings (needs 2 crossings)
   TowSectionReport crossing;  ///< at the middle crossing

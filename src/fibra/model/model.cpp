@@ -6,6 +6,7 @@
 
 #include "fibra/core/error.hpp"
 #include "fibra/model/fiber_path.hpp"
+#include "fibra/model/model_size.hpp"
 
 namespace fibra {
 
@@ -118,6 +119,15 @@ int add_fiber(Model& model, const FiberSpec& spec, int material) {
 }
 
 Model build_model(const Case& c) {
+  // read_case refuses a model too large; a case made in code is checked here, before any
+  // count is converted or allocated.
+  ModelSize size;
+  for (const FiberSpec& spec : c.fibers) size += fiber_size(spec.elements);
+  size.bodies = static_cast<double>(c.bodies.size());
+  if (const std::string why = size_excess(size, machine_size_limits()); !why.empty())
+    throw InputError(c.file, "fiber",
+                     fmt::format("the {} fibers ({:.6g} elements in all) make a model too large to run: {}",
+                                 c.fibers.size(), size.elements, why));
   Model model;
   model.materials = c.materials;
   for (size_t i = 0; i < c.fibers.size(); ++i) {
