@@ -1212,7 +1212,13 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     m_weave_depth = -1.0;  // measured at the step's first detection
     const double nominal = 1.0 / st.increments;
     const int max_increments = st.max_increments > 0 ? st.max_increments : 100 * st.increments;
+    const bool weave_step = st.kind == StepSpec::Kind::Weave;
     double lambda = 0.0, dl = nominal;
+    // Load steps: the motion of the step's last converged increment and its size, for the next
+    // increment's predictor (below). A body's rotation dofs are its rotation over the
+    // increment (they restart from zero at each commit), so they scale like the rest.
+    VecX last_motion;
+    double last_dl = 0.0;
     auto t_increment = std::chrono::steady_clock::now();
     int done = 0, attempts = 0;
     // Relax steps (with contact): every increment is a proximal-point step, a drag towards the
@@ -1292,6 +1298,17 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       // drag then holds it there, not at the last level's state); friction slips and crossings
       // are still measured from the last level's state.
       if (test && step_dl > 0.0 && opt.test_predictor) predict_test_level(step, lambda + step_dl);
+      // Load steps (no drag, no weaving): an increment starts from the last converged state
+      // moved on by the last increment's motion scaled to this one's size (a secant
+      // predictor), not from that state with only the prescribed dofs moved: the first
+      // residual is then of the order of the path's curvature times the increment squared
+      // instead of the increment's whole load. docs/theory/solver.md, "Steps and increments".
+      if (!relax && !weave_step && step_dl > 0.0 && last_dl > 0.0) {
+        const std::vector<char>& fixed = m_problem->fixed();
+        const double scale = step_dl / last_dl;
+        for (Index d = 0; d < m_q.size(); ++d)
+          if (!fixed[d]) m_q[d] += scale * last_motion[d];
+      }
       m_drag_anchor = m_q;
       const std::vector<ContactElement> saved_contacts = m_contact ? m_problem->contacts() : std::vector<ContactElement>{};
       const std::vector<double> saved_multipliers = m_bodies ? m_bodies->multipliers() : std::vector<double>{};
@@ -1406,6 +1423,10 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         m_relax_drag = std::max(std::max(fall * m_relax_drag, relax_min), std::min(failed_floor, relax_max));
         const double tolerance = test ? opt.test_tolerance : opt.relax_tolerance;
         failed_floor *= m_relax_residual > 100.0 * tolerance ? fall : 0.7;
+      }
+      if (!relax && !weave_step && step_dl > 0.0) {
+        last_motion = m_q - saved;
+        last_dl = step_dl;
       }
       lambda += step_dl;
       if (1.0 - lambda < 1e-12) lambda = 1.0;
