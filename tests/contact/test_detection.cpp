@@ -102,7 +102,16 @@ void check_consistency(const Model& model, const VecX& q, const Detection& det, 
     const ProximityZone& zone = det.zones[z];
     EXPECT_EQ(zone.first_element, expected_first);
     EXPECT_GE(zone.num_elements, 1);
-    EXPECT_LE(zone.fiber_i, zone.fiber_j);
+    // Fiber i is the sampled one: the lower index, or the thinner one when it is over 3 times
+    // thinner (section radius max(a, b), as the broad phase takes it).
+    auto radius = [&](int f) {
+      const Section& sec = model.sections[model.fibers[f].section];
+      return std::max(sec.a, sec.b);
+    };
+    EXPECT_TRUE(zone.fiber_i <= zone.fiber_j || 3.0 * radius(zone.fiber_i) < radius(zone.fiber_j))
+        << zone.fiber_i << " " << zone.fiber_j;
+    EXPECT_FALSE(zone.fiber_i < zone.fiber_j && 3.0 * radius(zone.fiber_j) < radius(zone.fiber_i))
+        << zone.fiber_i << " " << zone.fiber_j;
     EXPECT_LE(zone.s_begin, zone.s_end);
     expected_first += zone.num_elements;
     if (z > 0) {
@@ -498,8 +507,12 @@ TEST(Detection, RadiiOneToTen) {
     ASSERT_EQ(det.zones.size(), 1u);
     EXPECT_GE(det.elements.size(), 1u);
     EXPECT_LE(det.elements.size(), 6u);
+    // The thin fiber is sampled whatever the order: its particle is a, the normal from it
+    // towards the thick one (check_consistency: from centre a to centre b), across the crossing.
+    const double below_to_above = order == 0 ? -1.0 : 1.0;  // the thin fiber is above in order 0
     for (const ContactElement& c : det.elements) {
-      EXPECT_GT(c.normal.z(), 0.95);
+      EXPECT_EQ(x.model.elements[c.a.element].fiber, order == 0 ? 1 : 0);
+      EXPECT_GT(below_to_above * c.normal.z(), 0.95);
       EXPECT_LT(centre(x.model, q, c.a).head<2>().norm(), 3 * r);
     }
   }
@@ -514,7 +527,8 @@ TEST(Detection, RadiiOneToTen) {
   check_consistency(model, model.reference, det);
   ASSERT_EQ(det.zones.size(), 1u);
   EXPECT_NEAR(det.elements.size(), length / r, 1.0);
-  for (const ContactElement& e : det.elements) EXPECT_NEAR(e.normal.dot(Vec3::UnitY()), 1.0, 1e-12);
+  // Sampled on the thin fiber (above the thick one along y): normals from it, along -y.
+  for (const ContactElement& e : det.elements) EXPECT_NEAR(e.normal.dot(Vec3::UnitY()), -1.0, 1e-12);
 }
 
 TEST(Detection, NearlyParallelAndTangentFibers) {

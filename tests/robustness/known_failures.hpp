@@ -45,11 +45,6 @@ inline constexpr KnownFailure kKnownFailures[] = {
      "converges, but b's equilibrium is resolved to 6.6e-6 of its 15 uN load only (the contact force differs "
      "from b's reactions by 2.3e-4): Newton's residual is measured against a floor of 1e-5 E A of the stiffest "
      "fiber, 1650 N here, 1e8 times the thin fiber's load"},
-    {"capstan_drum_90deg_mu03_ratio10",
-     "the contact of a rope with a straight drum fiber across its plane degenerates: 32 elements in 4 zones at "
-     "the first increment, then 8, then 2 or 3 (the wrap needs about 16 at the default spacing), alternating "
-     "between 1 zone of 2 elements and 2 zones of 3 from one pull increment to the next; the rope hangs on "
-     "them (0.3 to 0.47 N each), and T1/T2 alternates between 1.00 and 1.06 instead of reaching 1.53"},
 };
 
 /// The mark of case `name`, or null.

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <limits>
 #include <chrono>
 #include <cmath>
 #include <numbers>
@@ -124,6 +125,9 @@ Vec3 point_at(const std::vector<CentroidCurve>& curves, Index first, Index count
   split_parameter(u, count, local, eta);
   return curves[first + local].value(eta);
 }
+
+// A fiber over this many times thinner than another is the one sampled in their pair.
+constexpr double kSampleThinner = 3.0;
 
 // Where the plane through x_g normal to tau cuts a fiber's centroid line.
 enum class Cut {
@@ -250,7 +254,16 @@ ContactDetector::ContactDetector(const Model& model, DetectionParams params)
       m_params(params),
       m_broad(model, BroadPhaseParams{params.margin, params.self_exclusion}),
       m_fiber_pair_begin(model.fibers.size() + 1),
-      m_fiber_out(model.fibers.size()) {}
+      m_fiber_out(model.fibers.size()) {
+  double r_min = std::numeric_limits<double>::infinity(), r_max = 0.0;
+  for (const Fiber& f : model.fibers) {
+    if (f.num_elements == 0) continue;
+    const double r = m_broad.info(f.first_element).radius;
+    r_min = std::min(r_min, r);
+    r_max = std::max(r_max, r);
+  }
+  m_mixed_radii = r_max > kSampleThinner * r_min;
+}
 
 ContactDetector::~ContactDetector() = default;
 
@@ -262,9 +275,27 @@ Detection ContactDetector::detect(const VecX& q) {
 
 void ContactDetector::detect(const VecX& q, Detection& out) {
   const auto t0 = std::chrono::steady_clock::now();
-  const std::vector<ElementPair>& pairs = m_broad.find_pairs(q);
+  const std::vector<ElementPair>* found = &m_broad.find_pairs(q);
   const int num_fibers = static_cast<int>(m_model.fibers.size());
-  // Pairs are sorted by their lower element, which lies on the lower fiber.
+  // The fiber of a pair whose centroid line is sampled (fiber i) is the lower one, or the
+  // thinner one when it is over kSampleThinner times thinner: a thin fiber wound round a thick one (a rope
+  // over a drum fiber) is close to it all along the wrap, and every point of the wrap is equally
+  // far from the thick fiber's axis, so the thick fiber's samples had no defined closest point
+  // on the thin one and the wrap got 2 or 3 of its ~16 elements.
+  if (m_mixed_radii) {
+    m_sampled_pairs = *found;
+    for (ElementPair& e : m_sampled_pairs)
+      if (m_broad.info(e.second).radius * kSampleThinner < m_broad.info(e.first).radius) std::swap(e.first, e.second);
+    std::sort(m_sampled_pairs.begin(), m_sampled_pairs.end(), [&](const ElementPair& x, const ElementPair& y) {
+      const int fx = m_broad.info(x.first).fiber, fy = m_broad.info(y.first).fiber;
+      if (fx != fy) return fx < fy;
+      if (x.first != y.first) return x.first < y.first;
+      return x.second < y.second;
+    });
+    found = &m_sampled_pairs;
+  }
+  const std::vector<ElementPair>& pairs = *found;
+  // Pairs are sorted by their sampled element's fiber.
   Index p = 0;
   for (int f = 0; f < num_fibers; ++f) {
     m_fiber_pair_begin[f] = p;
@@ -300,7 +331,7 @@ void ContactDetector::detect_fiber(int fiber, const VecX& q, Workspace& work, Fi
   out.elements.clear();
   out.last_end_keys.swap(out.end_keys);
   out.end_keys.clear();
-  const std::vector<ElementPair>& pairs = m_broad.pairs();
+  const std::vector<ElementPair>& pairs = m_mixed_radii ? m_sampled_pairs : m_broad.pairs();
   const std::vector<CentroidCurve>& curves = m_broad.curves();
   const std::vector<Box>& boxes = m_broad.boxes();
   work.block.assign(pairs.begin() + m_fiber_pair_begin[fiber], pairs.begin() + m_fiber_pair_begin[fiber + 1]);
@@ -576,7 +607,22 @@ void ContactDetector::detect_fiber(int fiber, const VecX& q, Workspace& work, Fi
         double u_i = p0.u_i + w * (p1.u_i - p0.u_i);
         double u_j = p0.u_j + w * (p1.u_j - p0.u_j);
         const double tol = 1e-9 * ctx.threshold;
-        if (!cut_pair(curves, ctx, x_g, tau, tol, u_i, u_j)) continue;
+        if (!cut_pair(curves, ctx, x_g, tau, tol, u_i, u_j)) {
+          // The plane normal to the intermediate geometry can hold one of the lines: a fiber
+          // wound round a thicker one that crosses it (a rope over a drum fiber), where every
+          // plane normal to the rope contains the drum's axis. Then the plane starts normal to
+          // the bisector of the tangents at the zone's matched points instead (the refinement
+          // below goes there anyway); without it such a wrap kept 2 or 3 of its ~16 elements.
+          x_g = p0.m + w * (p1.m - p0.m);
+          u_i = p0.u_i + w * (p1.u_i - p0.u_i);
+          u_j = p0.u_j + w * (p1.u_j - p0.u_j);
+          const Vec3 t_i = tangent_at(curves, ctx.first_i, ctx.count_i, u_i);
+          const Vec3 t_j = tangent_at(curves, ctx.first_j, ctx.count_j, u_j);
+          const Vec3 bisector = t_i + (t_i.dot(t_j) >= 0.0 ? 1.0 : -1.0) * t_j;
+          if (!(bisector.norm() > 1e-8)) continue;
+          tau = bisector.normalized();
+          if (!cut_pair(curves, ctx, x_g, tau, tol, u_i, u_j)) continue;
+        }
         // Again with the plane normal to the bisector of the tangents at the cuts (a few
         // fixed-point steps), so that it stays within 45 degrees of both sections however
         // the fibers curve; straight fibers need none.

@@ -30,7 +30,7 @@ struct DetectionParams {
 
 /// A proximity zone: a part of fiber i close to a part of fiber j (i <= j; i == j: self-contact).
 struct ProximityZone {
-  int fiber_i = 0;        ///< sampled fiber (the lower index)
+  int fiber_i = 0;        ///< sampled fiber: the lower index, or the thinner one when over 3 times thinner
   int fiber_j = 0;        ///< other fiber
   double s_begin = 0;     ///< start of the zone on fiber i, reference arc length [m]
   double s_end = 0;       ///< end of the zone on fiber i, reference arc length [m]
@@ -76,7 +76,9 @@ class ContactDetector {
   const Model& m_model;
   DetectionParams m_params;
   BroadPhase m_broad;
-  std::vector<Index> m_fiber_pair_begin;  // per fiber: first candidate pair whose lower element is on it
+  std::vector<Index> m_fiber_pair_begin;  // per fiber: first candidate pair whose sampled element is on it
+  bool m_mixed_radii = false;             // some fibers are over 3 times thinner than others
+  std::vector<ElementPair> m_sampled_pairs;  // with mixed radii: the pairs, the thinner fiber's element first
   std::vector<FiberOutput> m_fiber_out;
   std::vector<std::unique_ptr<Workspace>> m_work;
 
