@@ -26,11 +26,13 @@
 #include "fibra/core/error.hpp"
 #include "fibra/io/case_reader.hpp"
 #include "fibra/model/model.hpp"
+#include "support/assembled.hpp"
 #include "support/finite_difference.hpp"
 
 namespace fibra {
 namespace {
 
+using test::dense;
 using test::fd_gradient;
 using test::fd_jacobian;
 using test::rel_error;
@@ -157,16 +159,6 @@ spin = true
 [[step]]
 name = "s"
 )";
-
-Eigen::MatrixXd dense(const BlockPattern& p, const std::vector<double>& values) {
-  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(p.rows(), p.rows());
-  for (Index c = 0; c < p.rows(); ++c)
-    for (int k = p.col_ptr()[c]; k < p.col_ptr()[c + 1]; ++k) {
-      m(p.row_idx()[k], c) = values[k];
-      m(c, p.row_idx()[k]) = values[k];
-    }
-  return m;
-}
 
 struct Fixture {
   Case c = parse_case_toml(kCase, "bodies.toml");

@@ -29,25 +29,18 @@
 #include "fibra/terms/contact_term.hpp"
 #include "fibra/terms/drag_term.hpp"
 #include "fibra/terms/load_term.hpp"
+#include "support/assembled.hpp"
 #include "support/finite_difference.hpp"
 
 namespace fibra {
 namespace {
 
+using test::dense;
 using test::fd_gradient;
 using test::fd_jacobian;
 using test::fd_step;
+using test::random_unit;
 using test::rel_error;
-
-Eigen::MatrixXd dense(const BlockPattern& p, const std::vector<double>& values) {
-  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(p.rows(), p.rows());
-  for (Index c = 0; c < p.rows(); ++c)
-    for (int k = p.col_ptr()[c]; k < p.col_ptr()[c + 1]; ++k) {
-      m(p.row_idx()[k], c) = values[k];
-      m(c, p.row_idx()[k]) = values[k];
-    }
-  return m;
-}
 
 /// A term assembled on its own: its energy, gradient and dense Hessian at q.
 struct Assembled {
@@ -152,11 +145,6 @@ void expect_derivatives(EnergyTerm& term, const Model& model, const VecX& q, dou
   if (term.num_local() > 0) {
     EXPECT_LT(rel_error(h.free_part(h.local_sum(q)), hess, stiffness), 1e-12) << term.name() << ", " << label;
   }
-}
-
-Vec3 random_unit(std::mt19937& rng) {
-  std::normal_distribution<double> n(0.0, 1.0);
-  return Vec3(n(rng), n(rng), n(rng)).normalized();
 }
 
 // A large-deformation state: rotations growing along the model (up to ~1 rad), 10 % stretches,

@@ -23,31 +23,18 @@
 #include "fibra/model/model.hpp"
 #include "fibra/solver/nodal_load.hpp"
 #include "fibra/solver/problem.hpp"
+#include "support/assembled.hpp"
 #include "support/finite_difference.hpp"
 
 namespace fibra {
 namespace {
 
+using test::dense;
 using test::fd_gradient;
 using test::fd_jacobian;
 using test::fd_step;
+using test::random_unit;
 using test::rel_error;
-
-Vec3 random_unit(std::mt19937& rng) {
-  std::normal_distribution<double> n(0.0, 1.0);
-  return Vec3(n(rng), n(rng), n(rng)).normalized();
-}
-
-// Dense symmetric matrix from the upper CSC values of a pattern.
-Eigen::MatrixXd dense(const BlockPattern& p, const std::vector<double>& values) {
-  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(p.rows(), p.rows());
-  for (Index c = 0; c < p.rows(); ++c)
-    for (int k = p.col_ptr()[c]; k < p.col_ptr()[c + 1]; ++k) {
-      m(p.row_idx()[k], c) = values[k];
-      m(c, p.row_idx()[k]) = values[k];
-    }
-  return m;
-}
 
 const char* kCase = R"(
 [[material]]
