@@ -57,7 +57,9 @@ inline constexpr KnownFailure kKnownFailures[] = {
     {"fabric_twill22_biaxial",
      "the relax ends with its edge forces balanced to 8.8e-6 of the largest only (relax_tolerance 1e-4 of the "
      "reference force); the warp's stiffness falls at the last level (7287 N against 7385 N, -1.3 %)"},
-    {"fabric_twill31_biaxial", "TWILL31"},
+    {"fabric_twill31_biaxial", "the relax does not end within its 60 s budget (about 180 increments, 55 cuts): its drag force wanders "
+     "between 8e-4 and 4e-3 of the reference force (relax_tolerance 1e-4) with the drag between 3.6 and 15 N/m, "
+     "falling and rising again, as issue 40's 2 x 2 basket weave did"},
     {"fabric_satin5_biaxial",
      "the relax ends with its edge forces balanced to 1.9e-5 of the largest only (relax_tolerance 1e-4 of the "
      "reference force); the weave, the crossings and the J-shaped curves pass"},
