@@ -1,0 +1,130 @@
+// Robustness corpus, fabrics (docs/robustness.md): small woven samples written as a user writes
+// them (a [fabric], [contact] with friction, steps weave, relax, then a test; no [solver]),
+// each woven, relaxed and tested, and checked against what the weave and the test must give
+// (robustness/fabric_support.hpp). The cases over ~15 s are in test_robustness_fabrics_large.cpp.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+
+#include "robustness/fabric_support.hpp"
+
+namespace fibra::test {
+namespace {
+
+class FabricBiaxial : public ::testing::TestWithParam<BiaxialCase> {};
+
+TEST_P(FabricBiaxial, WovenRelaxedAndPulled) { run_biaxial_case(GetParam()); }
+
+INSTANTIATE_TEST_SUITE_P(Robustness, FabricBiaxial,
+                         ::testing::Values(BiaxialCase{"fabric_plain_equibiaxial", 1.0, true, 60},
+                                           BiaxialCase{"fabric_plain_uniaxial", 0.0, false, 60},
+                                           BiaxialCase{"fabric_twill21_biaxial", 0.5, false, 60},
+                                           BiaxialCase{"fabric_basket2_biaxial", 1.0, false, 60},
+                                           BiaxialCase{"fabric_unbalanced_biaxial", 1.0, false, 60},
+                                           BiaxialCase{"fabric_tight_biaxial", 1.0, true, 60},
+                                           BiaxialCase{"fabric_loose_biaxial", 1.0, true, 60},
+                                           BiaxialCase{"fabric_carbon_biaxial", 1.0, true, 60},
+                                           BiaxialCase{"fabric_plain_width_grip", 1.0, true, 60}),
+                         [](const auto& p) { return std::string(p.param.name); });
+
+// ---------------------------------------------------------------------------------------------
+// Shear in both senses: the same 2 x 2 plain weave sheared to +5 and to -5 degrees, two case
+// files, each woven and relaxed. The plain weave is mapped onto itself by x -> -x, z -> -z,
+// which maps the shear to +angle onto the shear to -angle and the x-force of the top edge onto
+// its opposite: the curves are mirror images, F(+angle) = -F(-angle) at every level.
+// Tolerance: 1 % of the largest shear force; the two runs are mirror images except for the
+// order in which the solver meets the contacts, and each point is an equilibrium to 1e-4 of the
+// reference force (solver.test_tolerance). Each curve is also checked on its own: equilibrium
+// at every level (1e-4, as the biaxial curves), the shear force of the angle's sign and growing
+// with it at every level (a sample sheared from rest resists more as it turns).
+// ---------------------------------------------------------------------------------------------
+TEST(Robustness, fabric_plain_shear_mirror) {
+  Checks checks("fabric_plain_shear_mirror");
+  std::array<std::vector<CurvePoint>, 2> curves;
+  const std::array<const char*, 2> names = {"fabric_plain_shear_pos", "fabric_plain_shear_neg"};
+  for (int k = 0; k < 2; ++k) {
+    const CaseRun s = solve_file(names[k], 60);
+    checks.converged(s);
+    if (!check_woven_and_relaxed(checks, s, true) || !step_end(s, "shear")) continue;
+    curves[k] = curve(s, "shear");
+    const std::vector<CurvePoint>& c = curves[k];
+    if (!checks.expect(c.size() >= 4, fmt::format("{}: curve points: {}", names[k], c.size()))) continue;
+    const double sense = k == 0 ? 1.0 : -1.0;
+    double worst = 0;
+    int growing = 0;
+    for (size_t i = 1; i < c.size(); ++i) {
+      worst = std::max(worst, c[i].imbalance / c[i].scale);
+      if (sense * c[i].shear_force > sense * c[i - 1].shear_force && sense * c[i].angle > sense * c[i - 1].angle)
+        ++growing;
+    }
+    checks.at_most(fmt::format("{}: every level, |in-plane sum of the edge forces| / largest edge force", names[k]),
+                   worst, 1e-4);
+    checks.expect(growing == static_cast<int>(c.size()) - 1,
+                  fmt::format("{}: angle and shear force growing in the step's sense at {} of {} levels (to {:.4g} "
+                              "N at {:.4g} degrees)",
+                              names[k], growing, c.size() - 1, c.back().shear_force, c.back().angle));
+  }
+  if (curves[0].size() >= 4 && curves[1].size() >= 4) {
+    const bool same_levels = curves[0].size() == curves[1].size();
+    checks.expect(same_levels, fmt::format("the same load levels in both senses: {} and {} points", curves[0].size(),
+                                           curves[1].size()));
+    if (same_levels) {
+      double largest = 0, worst_force = 0, worst_angle = 0;
+      for (size_t i = 0; i < curves[0].size(); ++i) {
+        largest = std::max(largest, std::abs(curves[0][i].shear_force));
+        worst_force = std::max(worst_force, std::abs(curves[0][i].shear_force + curves[1][i].shear_force));
+        worst_angle = std::max(worst_angle, std::abs(curves[0][i].angle + curves[1][i].angle));
+      }
+      checks.at_most("mirror: largest |F(+angle) + F(-angle)| / largest |F|", worst_force / largest, 0.01);
+      checks.at_most("mirror: largest |angle(+) + angle(-)| [degrees]", worst_angle, 0.01 * 5);
+    }
+  }
+  checks.finish();
+}
+
+// ---------------------------------------------------------------------------------------------
+// A loading-unloading cycle: the 2 x 2 plain weave pulled 1 % in equibiaxial tension in 4
+// levels ("pull"), then brought back to its relaxed size in 4 levels ("release", strain
+// 1/1.01 - 1 from its start): the release passes through the pull's strains (0.75, 0.5, 0.25,
+// 0 %). Friction dissipates on the way, so at each of those strains the unloading force is
+// below the loading one (hysteresis), in warp and weft; the pull's curve is checked as the
+// biaxial ones are, and the release's forces fall at every level.
+// ---------------------------------------------------------------------------------------------
+TEST(Robustness, fabric_plain_cycle) {
+  const std::string name = "fabric_plain_cycle";
+  const CaseRun s = solve_file(name, 90);
+  Checks checks(name);
+  checks.converged(s);
+  const Snapshot* relax = check_woven_and_relaxed(checks, s, false);
+  if (relax && step_end(s, "pull") && step_end(s, "release")) {
+    const Edges origin = edges(s, *relax);
+    const std::vector<CurvePoint> load = curve(s, "pull"), unload = curve(s, "release", &origin);
+    check_biaxial_curve(checks, load, 1.0);
+    int falling = 0, matched = 0, below = 0;
+    std::string first_bad;
+    for (size_t i = 1; i < unload.size(); ++i) {
+      if (unload[i].warp_force < unload[i - 1].warp_force && unload[i].weft_force < unload[i - 1].weft_force) ++falling;
+      for (const CurvePoint& l : load) {
+        // The same strain: both runs reach it from the same edge positions, to round-off.
+        if (std::abs(l.warp_strain - unload[i].warp_strain) > 1e-9) continue;
+        ++matched;
+        if (unload[i].warp_force < l.warp_force && unload[i].weft_force < l.weft_force) ++below;
+        else if (first_bad.empty())
+          first_bad = fmt::format(": at strain {:.4g}, unloading {:.5g} / {:.5g} N against loading {:.5g} / {:.5g} N",
+                                  l.warp_strain, unload[i].warp_force, unload[i].weft_force, l.warp_force,
+                                  l.weft_force);
+      }
+    }
+    checks.expect(falling == static_cast<int>(unload.size()) - 1,
+                  fmt::format("release: warp and weft forces falling at {} of {} levels", falling, unload.size() - 1));
+    checks.at_least("release points at a strain of the pull (0.75, 0.5, 0.25, 0 %)", matched, 2);
+    checks.expect(matched > 0 && below == matched,
+                  fmt::format("hysteresis: unloading forces below the loading ones at {} of {} strains{}", below,
+                              matched, first_bad));
+  }
+  checks.finish();
+}
+
+}  // namespace
+}  // namespace fibra::test
