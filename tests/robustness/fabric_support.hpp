@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <ostream>
 
 #include "fibra/model/fabric_report.hpp"
 #include "robustness/robustness_support.hpp"
@@ -223,6 +224,9 @@ struct BiaxialCase {
   bool balanced;   ///< also by swapping warp and weft (equal crimps)
   double budget;   ///< wall-time budget [s]
 };
+
+/// GoogleTest prints a parameterized case by its case file's name.
+inline void PrintTo(const BiaxialCase& c, std::ostream* os) { *os << c.name; }
 
 /// Runs a biaxial case and checks it (the comment above).
 inline void run_biaxial_case(const BiaxialCase& p) {
