@@ -179,5 +179,61 @@ increments = 1
   EXPECT_NE(d.largest_motion.find("fiber \"beam\""), std::string::npos) << d.largest_motion;
 }
 
+// A fiber driven through another in one increment (from 1.5 mm above it to 1.5 mm below, radii
+// 0.5 mm: no contact element before, none after), no cut allowed: the swept check of the contact
+// loop refuses the attempt, and the diagnosis says so, naming both fibers.
+TEST(StallDiagnosis, ContactLoopRefusalIsNamed) {
+  const test::Solved s = solve_toml(R"(
+[[material]]
+name = "m"
+young = 1e9
+poisson = 0.3
+[[fiber]]
+name = "below"
+material = "m"
+radius = 0.0005
+points = [[-0.005, 0, 0], [0.005, 0, 0]]
+elements = 4
+[[fiber]]
+name = "above"
+material = "m"
+radius = 0.0005
+points = [[0, -0.005, 0.0015], [0, 0.005, 0.0015]]
+elements = 4
+[contact]
+[solver]
+max_cuts = 0
+[[fix]]
+fiber = "below"
+node = "first"
+[[fix]]
+fiber = "below"
+node = "last"
+[[fix]]
+fiber = "above"
+node = "first"
+[[fix]]
+fiber = "above"
+node = "last"
+[[step]]
+name = "through"
+increments = 1
+  [[step.displacement]]
+  fiber = "above"
+  node = "first"
+  value = [0, 0, -0.003]
+  [[step.displacement]]
+  fiber = "above"
+  node = "last"
+  value = [0, 0, -0.003]
+)");
+  ASSERT_FALSE(s.converged());
+  const StallDiagnosis& d = s.result.diagnosis;
+  EXPECT_NE(d.refusal.find("through each other"), std::string::npos) << d.text();
+  EXPECT_NE(d.refusal.find("fiber \"below\""), std::string::npos) << d.refusal;
+  EXPECT_NE(d.refusal.find("fiber \"above\""), std::string::npos) << d.refusal;
+  EXPECT_EQ(d.text().rfind("the contact loop refused the last attempt: ", 0), 0u) << d.text();
+}
+
 }  // namespace
 }  // namespace fibra

@@ -281,13 +281,15 @@ void ContactManager::commit(std::vector<ContactElement>& contacts, const std::ve
 }
 
 bool ContactManager::passed_through(const std::vector<ContactElement>& contacts,
-                                    const std::vector<ContactResponse>& responses) const {
+                                    const std::vector<ContactResponse>& responses,
+                                    std::pair<Index, Index>* where) const {
   for (size_t k = 0; k < contacts.size(); ++k)
     if (contacts[k].fresh && -responses[k].gap > 0.5 * pair_radius(contacts[k]) &&
         -responses[k].gap > 4.0 * m_spec.max_penetration * pair_radius(contacts[k])) {
       if (debug_newton())
         fmt::print(stderr, " passed through: elements {} and {}, penetration {:.3e} (radius {:.3e})\n",
                    contacts[k].a.element, contacts[k].b.element, -responses[k].gap, pair_radius(contacts[k]));
+      if (where) *where = {contacts[k].a.element, contacts[k].b.element};
       return true;
     }
   return false;
@@ -313,7 +315,7 @@ void closest_points(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& 
 
 }  // namespace
 
-bool ContactManager::crossed(const VecX& q_start, const VecX& q) const {
+bool ContactManager::crossed(const VecX& q_start, const VecX& q, std::pair<Index, Index>* where) const {
   double motion = 0.0;
   for (Index k = 0; k < m_model.num_nodes(); ++k)
     motion = std::max(motion, (q.segment<3>(9 * k) - q_start.segment<3>(9 * k)).norm());
@@ -361,6 +363,7 @@ bool ContactManager::crossed(const VecX& q_start, const VecX& q) const {
     if (gap < 0.5 * (radius(pr.first) + radius(pr.second))) {
       if (debug_newton())
         fmt::print(stderr, " crossed: elements {} and {}, gap {:.3e} at tau {:.3f}\n", pr.first, pr.second, gap, tau);
+      if (where) *where = {pr.first, pr.second};
       return true;
     }
   }

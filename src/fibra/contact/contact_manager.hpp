@@ -5,6 +5,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "fibra/contact/contact_element.hpp"
@@ -67,7 +68,9 @@ class ContactManager {
               const VecX& q) const;
   /// True if a contact element without history penetrates deeper than a fiber can within one
   /// increment (a crossing missed between detections).
-  bool passed_through(const std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses) const;
+  /// `where`, when set, receives the element pair of the first such element.
+  bool passed_through(const std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses,
+                      std::pair<Index, Index>* where = nullptr) const;
   /// True if the centroid lines of two elements crossed each other between q_start and q (a
   /// pass-through that detections at both states would miss). Candidate pairs come from a
   /// broad phase at the mid state with boxes grown by the largest nodal motion; each element is
@@ -75,7 +78,8 @@ class ContactManager {
   /// chords' common normal, of the vector between their closest points, with the chords closer
   /// than half the sum of the radii when it vanishes (through each other, not around an end nor
   /// side by side).
-  bool crossed(const VecX& q_start, const VecX& q) const;
+  /// `where`, when set, receives the element pair that crossed.
+  bool crossed(const VecX& q_start, const VecX& q, std::pair<Index, Index>* where = nullptr) const;
   /// Largest penetration of `contacts` at q (gaps along their own normals), divided by the
   /// allowed penetration of each pair.
   double penetration_ratio(const std::vector<ContactElement>& contacts, const VecX& q) const;

@@ -292,6 +292,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                       {"bending_stiffness", d.bending_stiffness},
                       {"softest_mode", d.softest_mode},
                       {"largest_motion", d.largest_motion},
+                      {"refusal", d.refusal},
                       {"text", d.text()}};
   }
   j["counts"] = {{"fibers", report.fibers}, {"nodes", report.nodes}, {"dofs", report.dofs},

@@ -103,10 +103,11 @@ std::string StallDiagnosis::tangent_name() const {
 
 std::string StallDiagnosis::text() const {
   std::string s;
+  if (!refusal.empty()) s = fmt::format("the contact loop refused the last attempt: {}. Besides, ", refusal);
   const std::string mode = softest_mode.empty() ? std::string("(not found)") : softest_mode;
   switch (tangent) {
     case Tangent::Indefinite:
-      s = fmt::format(
+      s += fmt::format(
           "the last equilibrium is unstable (its tangent is indefinite; softest mode {:.3g} N/m, where the softest "
           "fiber bent as a cantilever has {:.3g} N/m): {}. Past a buckling load, a snap-through or a limit load no equilibrium near the "
           "last one follows the load. What can be changed: drive that place by a prescribed displacement instead of a "
@@ -114,7 +115,7 @@ std::string StallDiagnosis::text() const {
           softest_stiffness, bending_stiffness, mode);
       break;
     case Tangent::Singular:
-      s = fmt::format(
+      s += fmt::format(
           "nothing resists a motion of the model (its tangent is singular; softest mode {:.3g} N/m, where the softest "
           "fiber bent as a cantilever has {:.3g} N/m): {}. A fiber held only by what does not hold it yet (contact not reached, a free "
           "spin, a body without support) moves without limit. What can be changed: hold it with a [[fix]] or a "
@@ -122,14 +123,14 @@ std::string StallDiagnosis::text() const {
           softest_stiffness, bending_stiffness, mode);
       break;
     case Tangent::Definite:
-      s = fmt::format(
+      s += fmt::format(
           "the last equilibrium is stable (its tangent is positive definite; softest mode {:.3g} N/m, {}), so the "
           "increment's own changes (contact elements appearing, stick and slip switching, large rotations) are too "
           "large for Newton's method. What can be changed: more increments in that step.",
           softest_stiffness, mode);
       break;
     case Tangent::Unknown:
-      s = "the tangent at the last equilibrium could not be factorized.";
+      s += "the tangent at the last equilibrium could not be factorized.";
       break;
   }
   if (!largest_motion.empty()) s += fmt::format(" The failed attempt moved most at {}.", largest_motion);

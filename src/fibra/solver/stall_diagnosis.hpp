@@ -28,6 +28,9 @@ struct StallDiagnosis {
   double bending_stiffness = 0;  ///< scale: the softest fiber bent as a whole cantilever, 3 E I / L^3 [N/m]
   std::string softest_mode;      ///< describe_motion of the softest mode
   std::string largest_motion;    ///< describe_motion of the failed attempt's motion
+  /// Why the contact loop refused the failed attempt (fibers through each other, loops that did
+  /// not settle), or empty when it did not: Newton then failed.
+  std::string refusal;
   /// The diagnosis as sentences for the failure report: what moves without resisting, where
   /// the attempt went, and what the user can change.
   std::string text() const;

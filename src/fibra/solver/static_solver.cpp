@@ -212,6 +212,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   apply(step, lambda);
   m_contact_stats = ContactStats{};
   m_binding_updates = 0;
+  m_refusal.clear();
   m_newton_tolerance = m_case.solver.residual_tolerance;
   m_tolerance_scale = 1.0;
   if (!m_contact) return equilibrium(history, iterations, residual);
@@ -379,7 +380,11 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       }
     }
     iterations = total_iterations;
-    if (!normals_settled) return false;
+    if (!normals_settled) {
+      m_refusal = fmt::format("the contact normals did not settle within contact.max_normal_updates ({}) updates",
+                              spec.max_normal_updates);
+      return false;
+    }
     const std::vector<ContactResponse> responses = m_problem->contact_responses(m_q);
     const int raised = m_contact->adapt_penalty(m_problem->contacts(), responses);
     m_contact_stats.penalty_raises += raised;
@@ -447,7 +452,12 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     if ((same && (raised == 0 || deferred)) || stalled_increment) {
       // Fibers that went through each other within the increment: cut it (not while
       // weaving, where crossing tows pass through each other by design).
-      if (!weave && m_contact->crossed(m_q_start, m_q)) return false;
+      std::pair<Index, Index> pair;
+      if (!weave && m_contact->crossed(m_q_start, m_q, &pair)) {
+        m_refusal = fmt::format("{} and {} passed through each other within the increment (the swept check)",
+                                element_name(pair.first), element_name(pair.second));
+        return false;
+      }
       // Nothing changed since `responses` (same state, elements, normals and penalties).
       m_contact->add_stats(m_problem->contacts(), responses, m_contact_stats);
       m_contact_responses = responses;
@@ -480,7 +490,12 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     // between two detections); the increment is cut.
     if (m_problem->set_contacts(contacts, friction)) m_linear->analyze(m_problem->pattern());
     const std::vector<ContactResponse> fresh_responses = m_problem->contact_responses(m_q);
-    if (!weave && m_contact->passed_through(m_problem->contacts(), fresh_responses)) return false;
+    std::pair<Index, Index> through;
+    if (!weave && m_contact->passed_through(m_problem->contacts(), fresh_responses, &through)) {
+      m_refusal = fmt::format("a new contact element finds {} and {} through each other", element_name(through.first),
+                              element_name(through.second));
+      return false;
+    }
     // In steps without a drag: the fresh elements penetrate beyond the cap where the solved
     // ones did not, and nothing was raised (the fresh particles lie between the solved ones).
     // Their zones get their stiffer penalty now: solved again with the same penalty, the
@@ -490,7 +505,14 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       m_contact_stats.penalty_raises += m_contact->adapt_penalty(m_problem->contacts(), fresh_responses);
     contacts = m_problem->contacts();
   }
+  m_refusal = fmt::format("the contact detection did not settle within contact.max_detections ({}) passes",
+                          spec.max_detections);
   return false;
+}
+
+std::string StaticSolver::element_name(Index element) const {
+  const Fiber& f = m_model.fibers[m_model.elements[element].fiber];
+  return fmt::format("fiber \"{}\" (element {})", f.name, element - f.first_element);
 }
 
 double StaticSolver::normal_update_residual() {
@@ -1272,9 +1294,13 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     m_iteration_factor = 1;
     m_relax_settling = false;
     // A failed run: the state at the last converged load factor, the attempt that failed.
-    VecX failed_state;  // the last state of the last failed attempt
+    VecX failed_state;           // the last state of the last failed attempt
+    std::string failed_refusal;  // why the contact loop refused it, if it did
     auto fail = [&](double attempted, const std::vector<double>& history, std::string message) {
-      if (failed_state.size() == m_q.size()) result.diagnosis = diagnose_stall(failed_state);
+      if (failed_state.size() == m_q.size()) {
+        result.diagnosis = diagnose_stall(failed_state);
+        result.diagnosis.refusal = failed_refusal;
+      }
       result.status = RunResult::Status::Failed;
       result.step = st.name;
       result.load_factor = lambda;
@@ -1329,6 +1355,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       }
       if (!ok) {
         failed_state = m_q;
+        failed_refusal = m_refusal;
         m_q = saved;
         if (m_bodies) m_bodies->set_multipliers(saved_multipliers);
         if (m_contact && m_problem->set_contacts(saved_contacts, m_contact->friction()))

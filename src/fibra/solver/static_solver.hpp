@@ -129,6 +129,8 @@ class StaticSolver {
   /// m_hessian, maybe shifted), scaled to unit length in weighed coordinates (every dof a
   /// length, see m_length_scale); returns its stiffness v.Hv [N/m]. `mode` is in the dofs' units.
   double softest_mode(int iterations, VecX& mode);
+  /// A beam element as a user finds it: its fiber's name and its index along the fiber.
+  std::string element_name(Index element) const;
   /// Weaving: +1 / -1 when the contact normal from fiber fa towards fiber fb must be +z / -z
   /// (fibers of crossing tows, side from the weave matrix), 0 otherwise.
   int weave_side(int fa, int fb) const;
@@ -161,6 +163,7 @@ class StaticSolver {
   std::vector<std::string> m_reaction_columns;
   std::vector<Index> m_reaction_nodes;
   int m_binding_updates = 0;  // in the current increment
+  std::string m_refusal;      // why the contact loop refused the current increment (empty: it did not)
   double m_max_step = 0;      // largest nodal motion per Newton iteration [m]; 0 = no limit
   double m_zero_stiffness = 0;  // a mode stiffness below this is zero: 1e-6 of the softest fiber's 3 E I / L^3 [N/m]
   std::vector<std::pair<int, int>> m_fiber_tow;  // per fiber: (0 warp / 1 weft / -1 none, tow index)
