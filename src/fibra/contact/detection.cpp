@@ -4,9 +4,9 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <limits>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "fibra/beam/beam_element.hpp"
@@ -602,10 +602,12 @@ void ContactDetector::detect_fiber(int fiber, const VecX& q, Workspace& work, Fi
         const ZonePoint& p1 = work.points[std::min(seg + 1, count - 1)];
         const double ds = p1.s - p0.s;
         const double w = ds > 1e-14 * ctx.threshold ? (s - p0.s) / ds : 0.0;
-        Vec3 x_g = p0.m + w * (p1.m - p0.m);
+        // The intermediate geometry and the matched points there (cut_pair moves x_g and the u's).
+        const Vec3 x_m = p0.m + w * (p1.m - p0.m);
+        const double u_i_m = p0.u_i + w * (p1.u_i - p0.u_i), u_j_m = p0.u_j + w * (p1.u_j - p0.u_j);
+        Vec3 x_g = x_m;
         Vec3 tau = (p0.tau + w * (p1.tau - p0.tau)).normalized();
-        double u_i = p0.u_i + w * (p1.u_i - p0.u_i);
-        double u_j = p0.u_j + w * (p1.u_j - p0.u_j);
+        double u_i = u_i_m, u_j = u_j_m;
         const double tol = 1e-9 * ctx.threshold;
         if (!cut_pair(curves, ctx, x_g, tau, tol, u_i, u_j)) {
           // The plane normal to the intermediate geometry can hold one of the lines: a fiber
@@ -613,9 +615,9 @@ void ContactDetector::detect_fiber(int fiber, const VecX& q, Workspace& work, Fi
           // plane normal to the rope contains the drum's axis. Then the plane starts normal to
           // the bisector of the tangents at the zone's matched points instead (the refinement
           // below goes there anyway); without it such a wrap kept 2 or 3 of its ~16 elements.
-          x_g = p0.m + w * (p1.m - p0.m);
-          u_i = p0.u_i + w * (p1.u_i - p0.u_i);
-          u_j = p0.u_j + w * (p1.u_j - p0.u_j);
+          x_g = x_m;
+          u_i = u_i_m;
+          u_j = u_j_m;
           const Vec3 t_i = tangent_at(curves, ctx.first_i, ctx.count_i, u_i);
           const Vec3 t_j = tangent_at(curves, ctx.first_j, ctx.count_j, u_j);
           const Vec3 bisector = t_i + (t_i.dot(t_j) >= 0.0 ? 1.0 : -1.0) * t_j;

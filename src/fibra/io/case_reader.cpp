@@ -25,6 +25,7 @@
 
 #include "fibra/core/error.hpp"
 #include "fibra/model/fabric.hpp"
+#include "fibra/model/model.hpp"
 
 namespace fibra {
 namespace {
@@ -2004,9 +2005,7 @@ Case Reader::read(const Value& root) const {
   // The whole model, the file's fibers and bodies with the fabric's, before the fabric is
   // expanded below.
   {
-    ModelSize own;
-    for (const FiberSpec& f : c.fibers) own += fiber_size(f.elements);
-    own.bodies = static_cast<double>(c.bodies.size());
+    const ModelSize own = case_size(c);
     const ModelSize fabric = c.fabric ? fabric_size(*c.fabric) : ModelSize{};
     ModelSize size = own;
     size += fabric;

@@ -135,21 +135,6 @@ Eigen::Vector2d principal_direction(const std::vector<Eigen::Vector2d>& points, 
   return d.dot(nominal) < 0.0 ? Eigen::Vector2d(-d) : d;
 }
 
-/// Lowest and highest z of the centroid line over eta in [t0, t1].
-void z_extremes(const Curve& cu, double t0, double t1, double& zmin, double& zmax) {
-  auto visit = [&](double t) {
-    const double z = cu.at(t).z();
-    zmin = std::min(zmin, z);
-    zmax = std::max(zmax, z);
-  };
-  visit(t0);
-  visit(t1);
-  if (cu.c2.z() != 0.0) {
-    const double t = -cu.c1.z() / (2.0 * cu.c2.z());
-    if (t > t0 && t < t1) visit(t);
-  }
-}
-
 /// Where a fiber first crosses each plane u = planes[k] (sorted ascending), u = x0[axis]:
 /// `out[k]` is the centroid there, or stays NaN when the fiber does not reach the plane.
 void cut_fiber(const Model& model, const VecX& q, const Fiber& f, int axis, const std::vector<double>& planes,
@@ -404,7 +389,7 @@ FabricReport fabric_report(const Case& c, const Model& model, const VecX& q,
           const Curve cu = element_curve(model, q, f.first_element + e);
           for_parts_in_range(coordinate(cu, tw.axis), tr.start, tr.end, [&](double t0, double t1) {
             double a = std::numeric_limits<double>::infinity(), b = -a;
-            z_extremes(cu, t0, t1, a, b);
+            extremes(coordinate(cu, 2), t0, t1, a, b);
             zlo = std::min(zlo, a - rad);
             zhi = std::max(zhi, b + rad);
           });

@@ -6,7 +6,6 @@
 
 #include "fibra/core/error.hpp"
 #include "fibra/model/fiber_path.hpp"
-#include "fibra/model/model_size.hpp"
 
 namespace fibra {
 
@@ -118,12 +117,17 @@ int add_fiber(Model& model, const FiberSpec& spec, int material) {
   return fiber_id;
 }
 
-Model build_model(const Case& c) {
-  // read_case refuses a model too large; a case made in code is checked here, before any
-  // count is converted or allocated.
+ModelSize case_size(const Case& c) {
   ModelSize size;
   for (const FiberSpec& spec : c.fibers) size += fiber_size(spec.elements);
   size.bodies = static_cast<double>(c.bodies.size());
+  return size;
+}
+
+Model build_model(const Case& c) {
+  // read_case refuses a model too large; a case made in code is checked here, before any
+  // count is converted or allocated.
+  const ModelSize size = case_size(c);
   if (const std::string why = size_excess(size, machine_size_limits()); !why.empty())
     throw InputError(c.file, "fiber",
                      fmt::format("the {} fibers ({:.6g} elements in all) make a model too large to run: {}",

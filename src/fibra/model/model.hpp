@@ -8,6 +8,7 @@
 #include "fibra/beam/beam_element.hpp"
 #include "fibra/beam/section.hpp"
 #include "fibra/model/case.hpp"
+#include "fibra/model/model_size.hpp"
 
 namespace fibra {
 
@@ -57,6 +58,9 @@ struct Model {
   /// Global node index of a node reference; throws InputError (file, key) when invalid.
   Index node_index(const NodeRef& ref, const std::string& file, const std::string& key) const;
 };
+
+/// The size of the fibers and bodies a case lists (a [fabric] not yet expanded is not in it).
+ModelSize case_size(const Case& c);
 
 /// Meshes all fibers of a case.
 Model build_model(const Case& c);

@@ -51,13 +51,17 @@ ModelSize& ModelSize::operator+=(const ModelSize& other) {
 ModelSize fiber_size(double elements) { return ModelSize{1, elements, 0}; }
 
 SizeLimits machine_size_limits() {
-  SizeLimits limits;
-  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
-  double memory = pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page)
-                                        : std::numeric_limits<double>::infinity();
-  memory = std::min({memory, cgroup_limit("/sys/fs/cgroup/memory.max"),
-                     cgroup_limit("/sys/fs/cgroup/memory/memory.limit_in_bytes")});
-  limits.memory = memory;
+  // Read once per process: every case read and every model built asks.
+  static const SizeLimits limits = [] {
+    SizeLimits l;
+    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+    double memory = pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page)
+                                          : std::numeric_limits<double>::infinity();
+    memory = std::min({memory, cgroup_limit("/sys/fs/cgroup/memory.max"),
+                       cgroup_limit("/sys/fs/cgroup/memory/memory.limit_in_bytes")});
+    l.memory = memory;
+    return l;
+  }();
   return limits;
 }
 

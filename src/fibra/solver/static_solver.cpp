@@ -151,15 +151,6 @@ StaticSolver::StaticSolver(const Case& c, const Model& model)
   } else {
     m_max_step = std::max(0.0, c.solver.max_step);
   }
-  // Scales of the softest things the model holds: a mode stiffness below a millionth of its
-  // most flexible fiber bent as a whole cantilever is zero (docs/theory/solver.md).
-  double bending = std::numeric_limits<double>::infinity();
-  for (const Fiber& f : model.fibers) {
-    const Section& sec = model.sections[f.section];
-    bending = std::min(bending, 3.0 * model.materials[f.material].young * std::min(sec.inertia_1, sec.inertia_2) /
-                                    std::pow(f.length, 3));
-  }
-  m_zero_stiffness = std::isfinite(bending) ? 1e-6 * bending : 0.0;
   m_q_start = m_q;
   m_drag_anchor = m_q;
   m_newton_tolerance = c.solver.residual_tolerance;
@@ -568,17 +559,9 @@ bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, do
 
 void StaticSolver::print_indefinite_tangent(double shift, double mean_diag) {
   fmt::print(stderr, "  indefinite tangent (shift {:.2e}); local Hessians:\n{}", shift, m_problem->local_spectra(m_q));
-  const std::vector<char>& fixed = m_problem->fixed();
   const Index n = m_q.size();
-  VecX v = VecX::Ones(n), w(n), hv(n);
-  for (int it = 0; it <= 30; ++it) {
-    for (Index d = 0; d < n; ++d)
-      if (fixed[d]) v[d] = 0.0;
-    v /= v.norm();
-    if (it == 30) break;
-    m_linear->solve(v, w);
-    v = w;
-  }
+  const VecX v = inverse_iteration(30);
+  VecX hv(n);
   std::vector<VecX> scratch;
   symmetric_multiply(m_problem->pattern(), m_hessian, 0.0, v, hv, scratch);
   fmt::print(stderr, "  softest mode: v.Hv = {:.3e} (mean diagonal {:.3e}); largest components:", v.dot(hv), mean_diag);
@@ -595,13 +578,10 @@ void StaticSolver::print_indefinite_tangent(double shift, double mean_diag) {
   fmt::print(stderr, "\n");
 }
 
-double StaticSolver::softest_mode(int iterations, VecX& mode) {
+VecX StaticSolver::inverse_iteration(int iterations) {
   const std::vector<char>& fixed = m_problem->fixed();
   const Index n = m_q.size();
-  // Inverse iteration with the factor of H + shift I in the dofs' own coordinates (where the
-  // shift is uniform, so the iteration finds H's most negative mode when there is one); the
-  // mode is then scaled to unit length in weighed coordinates u = L q (L = m_length_scale).
-  VecX v = VecX::Ones(n), x(n), hv(n);
+  VecX v = VecX::Ones(n), x(n);
   for (int it = 0; it <= iterations; ++it) {
     for (Index d = 0; d < n; ++d)
       if (fixed[d]) v[d] = 0.0;
@@ -610,7 +590,16 @@ double StaticSolver::softest_mode(int iterations, VecX& mode) {
     m_linear->solve(v, x);
     v = x;
   }
+  return v;
+}
+
+double StaticSolver::softest_mode(int iterations, VecX& mode) {
+  // In the dofs' own coordinates, where the factor's shift is uniform, so the iteration finds
+  // H's most negative mode when there is one; then scaled to unit length in weighed coordinates
+  // u = L q (L = m_length_scale).
+  const VecX v = inverse_iteration(iterations);
   mode = v / v.cwiseProduct(m_length_scale).norm();
+  VecX hv(v.size());
   std::vector<VecX> scratch;
   symmetric_multiply(m_problem->pattern(), m_hessian, 0.0, mode, hv, scratch);
   return mode.dot(hv);
@@ -624,39 +613,42 @@ StallDiagnosis StaticSolver::diagnose_stall(const VecX& failed) {
   for (Index d = 0; d < n; ++d)
     if (fixed[d]) motion[d] = 0.0;
   if (motion.allFinite()) diag.largest_motion = describe_motion(m_model, motion, m_length_scale);
-  // The tangent in weighed coordinates u = L q (L = m_length_scale: every dof a length), so
-  // that stiffnesses are in N/m whatever the dof: H_u = L^-1 H L^-1.
+  // The tangent at the last equilibrium, factorized (shifted until a factor passes when it is
+  // not positive definite: the inverse iteration needs a factor, whatever the tangent).
   m_problem->evaluate(m_q, &m_gradient, &m_hessian);
   const BlockPattern& p = m_problem->pattern();
-  double mean = 0.0, mean_raw = 0.0;
+  double mean_diag = 0.0;
   Index free = 0;
-  for (Index d = 0; d < n; ++d) {
-    if (fixed[d]) continue;
-    const double h = m_hessian[p.col_ptr()[d + 1] - 1];
-    mean += std::abs(h) / (m_length_scale[d] * m_length_scale[d]);
-    mean_raw += std::abs(h);
-    ++free;
-  }
+  for (Index d = 0; d < n; ++d)
+    if (!fixed[d]) {
+      mean_diag += std::abs(m_hessian[p.col_ptr()[d + 1] - 1]);
+      ++free;
+    }
   if (free == 0) return diag;
-  mean /= free;
-  mean_raw /= free;
+  mean_diag /= free;
   double shift = 0.0;
   FactorStatus st = m_linear->factorize(m_hessian, shift);
   const bool definite = st == FactorStatus::Ok;
-  while (st == FactorStatus::NotPositiveDefinite && shift < 1e3 * mean_raw) {
-    shift = shift == 0.0 ? 1e-12 * mean_raw : shift * 10.0;
+  while (st == FactorStatus::NotPositiveDefinite && shift < 1e3 * mean_diag) {
+    shift = shift == 0.0 ? 1e-12 * mean_diag : shift * 10.0;
     st = m_linear->factorize(m_hessian, shift);
   }
   if (st != FactorStatus::Ok) return diag;
   VecX mode;
   diag.softest_stiffness = softest_mode(40, mode);
   diag.softest_mode = describe_motion(m_model, mode, m_length_scale);
-  // A stiffness is zero next to the softest thing the model has: a whole fiber bending as a
-  // cantilever, 3 E I / L^3 (the mean diagonal is no scale: on a fiber of L/r = 1000 bending
-  // is 1e-10 of it). A factorization that fails proves the tangent indefinite, whatever the
-  // inverse iteration found.
-  diag.bending_stiffness = 1e6 * m_zero_stiffness;
-  const double zero = m_zero_stiffness > 0.0 ? m_zero_stiffness : 1e-12 * mean;
+  // A stiffness is zero next to the softest thing the model holds: its most flexible fiber
+  // bent as a whole cantilever, 3 E I / L^3 (the mean diagonal is no scale: on a fiber of
+  // L/r = 1000 bending is 1e-10 of it); zero is a millionth of that. A factorization that
+  // fails proves the tangent indefinite, whatever the inverse iteration found.
+  double bending = std::numeric_limits<double>::infinity();
+  for (const Fiber& f : m_model.fibers) {
+    const Section& sec = m_model.sections[f.section];
+    bending = std::min(bending, 3.0 * m_model.materials[f.material].young * std::min(sec.inertia_1, sec.inertia_2) /
+                                    std::pow(f.length, 3));
+  }
+  diag.bending_stiffness = bending;
+  const double zero = 1e-6 * bending;
   if (std::abs(diag.softest_stiffness) <= zero)
     diag.tangent = StallDiagnosis::Tangent::Singular;
   else if (!definite || diag.softest_stiffness < 0.0)

@@ -125,6 +125,9 @@ class StaticSolver {
   /// (the current state) and its softest mode, and the motion from there to `failed`, the
   /// failed attempt's last state. Factorizes (the run stops after it).
   StallDiagnosis diagnose_stall(const VecX& failed);
+  /// Inverse iteration with the current factor (of m_hessian, maybe shifted), from a uniform
+  /// vector: the unit vector after `iterations` solves, fixed dofs zero.
+  VecX inverse_iteration(int iterations);
   /// The tangent's softest mode by `iterations` inverse iterations with the current factor (of
   /// m_hessian, maybe shifted), scaled to unit length in weighed coordinates (every dof a
   /// length, see m_length_scale); returns its stiffness v.Hv [N/m]. `mode` is in the dofs' units.
@@ -165,7 +168,6 @@ class StaticSolver {
   int m_binding_updates = 0;  // in the current increment
   std::string m_refusal;      // why the contact loop refused the current increment (empty: it did not)
   double m_max_step = 0;      // largest nodal motion per Newton iteration [m]; 0 = no limit
-  double m_zero_stiffness = 0;  // a mode stiffness below this is zero: 1e-6 of the softest fiber's 3 E I / L^3 [N/m]
   std::vector<std::pair<int, int>> m_fiber_tow;  // per fiber: (0 warp / 1 weft / -1 none, tow index)
   double m_weave_depth = -1;     // penetration between crossing tows at the weave step's start [m]
   double m_relax_drag = 0;       // relax steps: drag stiffness per node of the next increment [N/m]
