@@ -1,8 +1,8 @@
 // The benchmarks' main: the heap set up as `fibra` sets it (large freed blocks kept, fibra/core/heap.hpp),
 // so factorizations and assemblies are measured as the program runs them. Without it, every large
-// block freed went back to the system and its pages were zeroed again at the next request; on this
-// virtual machine that once made the factorization benchmarks 3-5 times slower than their baseline
-// (docs/performance.md, session 20).
+// block freed goes back to the system and its pages are zeroed again at the next request; on the
+// reference virtual machine that has made the factorization benchmarks 3-5 times slower than their
+// baseline (docs/performance.md, "Memory: freed blocks kept").
 #include <benchmark/benchmark.h>
 
 #include "fibra/core/heap.hpp"

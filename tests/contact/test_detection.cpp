@@ -316,8 +316,8 @@ TEST(Detection, CrossingAtTheEndOfAFiberIsClipped) {
 // a grip that holds their ends across the tow while the tow turns): they come closest at that
 // end, and an element must sit there whatever the layout of the zone. Fiber b's end is pressed
 // 0.1 r into a's side and b leaves a at 0.08 rad; contact elements every 5 r (the woven
-// samples' spacing is 2.5 r). Measured before session 24's change (the plane of an element
-// dropped when it fell past a fiber's end, short zones anchored at their closest sample): at 7
+// samples' spacing is 2.5 r). Measured without the end's element (the plane of an element
+// dropped when it falls past a fiber's end, short zones anchored at their closest sample): at 7
 // of the 17 places of b's end along a the nearest element was 4.8-5.0 r away, its gap +0.3 r
 // (the end penetrated by 0.1 r unseen), at the 10 others 0.08-0.37 r inside; with b's end past
 // a's, 0.4 r inside a's end.
@@ -354,7 +354,7 @@ TEST(Detection, EndOfAFiberPressedAgainstAnotherHasItsElementThere) {
 // in, its end pressed 0.1 r into a's side (a tow's fibers side by side at a grip, one end
 // pushed against its neighbour as the tow turns). A long zone's elements sit at the middles of
 // equal cells, the first half a spacing in from the zone's end. Without an element at b's end
-// (the code before session 25) the nearest element was 1.6-2.5 r from it at these 17 places,
+// (the regular layout alone) the nearest element was 1.6-2.5 r from it at these 17 places,
 // the deepest gap -0.03 to 0 r against the end's -0.1 r: the end penetrated unseen until the
 // zone split into a short one (on the 480-fiber twill's shear, a pass per increment for the last
 // level's 18 increments). Both orders of the fibers (b is the sampled fiber or the other one).

@@ -313,23 +313,21 @@ TEST_F(Continue, ATestGoesOnWithTheDragThatLoadedItsLastLevel) {
 // grow by half. So from one level to the next the size is multiplied by 1.5 (grown) or 1 (the
 // loading had failed), then halved once per failure of the new level's loading; the last level may
 // take a remainder of less than a quarter of its size along (and be halved if it then fails).
-// Before this rule (growth after an increment of at most 4 iterations, loading or settling alike)
-// the sizes went 0.25, 0.1875, 0.1406, 0.1406, 0.0703, 0.0263, 0.0231, ... in 15 levels, 152
-// increments, 30 failed attempts, 1 070 Newton iterations; with it 15 levels, 133 increments, 13
-// failed attempts, 894 iterations (and at 60 degrees with 6 iterations the old rule ran out of
-// increments at 0.82 where this one ends). With the normals in the cutting plane (session 18)
-// the sizes go 0.5, 0.25, 0.0625, 0.03125, 0.03125, 0.02344, 0.02344, 0.01758, 0.01758,
-// 0.02637, 0.0166: grown at least once, every ratio allowed. The pseudo-time solves go to
-// pseudo_tolerance (test_inexact = 0): stopped at a hundredth of their drag force (the default)
-// they fit within 5 iterations and the level is cut once only, 0.5 and 0.5.
-// With session 25's detection (an element more at a fiber's end pressed along a long zone: in
-// this test's loading attempts it finds the wefts' fibers pressed into each other at their
-// gripped ends, up to 8.7 times the cap deep) the sizes on two threads go 0.5, 0.25, 0.0625,
-// 0.0625, 0.02344, 0.01172, 0.01172, 0.01758, 0.02637, 0.01709, 0.01709. On one thread
-// (OMP_NUM_THREADS=1) the path differs by round-off and reaches a level's settling increment
-// that needs 6 iterations at the stiffest drag: it failed after 12 cuts of the next level's
-// size until such an increment got more iterations instead (SettlingAtTheStiffestDragGetsMore-
-// Iterations); the sizes are now the same on one and two threads.
+// With the other steps' rule instead (growth after an increment of at most 4 iterations, loading
+// or settling alike) the sizes went 0.25, 0.1875, 0.1406, 0.1406, 0.0703, 0.0263, 0.0231, ... in
+// 15 levels, 152 increments, 30 failed attempts, 1 070 Newton iterations; with this one 15
+// levels, 133 increments, 13 failed attempts, 894 iterations (and at 60 degrees with 6
+// iterations that rule ran out of increments at 0.82 where this one ends). The pseudo-time
+// solves go to pseudo_tolerance (test_inexact = 0): stopped at a hundredth of their drag force
+// (the default) they fit within 5 iterations and the level is cut once only, 0.5 and 0.5.
+// The detection puts an element at a fiber's end pressed along a long zone: in this test's
+// loading attempts it finds the wefts' fibers pressed into each other at their gripped ends, up
+// to 8.7 times the cap deep. The sizes go 0.5, 0.25, 0.0625, 0.0625, 0.02344, 0.01172, 0.01172,
+// 0.01758, 0.02637, 0.01709, 0.01709: grown at least once, every ratio allowed. They are the
+// same on one and two threads (OMP_NUM_THREADS=1): on one thread the path differs by round-off
+// and reaches a level's settling increment that needs 6 iterations at the stiffest drag, which
+// gets more iterations rather than cutting the next level's size
+// (SettlingAtTheStiffestDragGetsMoreIterations; cutting it failed after 12 cuts).
 TEST_F(Continue, TestLevelsGrowBackAfterACut) {
   ASSERT_TRUE(s_whole);
   const Case c = sheared_in_one_level(5);

@@ -389,8 +389,8 @@ const std::string kShearInTwo = "[[step]]\nname = \"shear\"\nkind = \"shear\"\na
 // Biaxial, ratio 0.5: the warp edges move apart by 0.4 % of their distance at the step's start
 // (not at the flat start) and the weft ones by half that; at both levels the four edge forces
 // balance (an equilibrium without drag), and both directions carry more than the weaving's
-// tension. Measured: warp 3.0 -> 14.3 N, weft 3.0 -> 11.35 N (14.6 and 11.5 N before session 23,
-// with one edge of each pair held).
+// tension. Measured: warp 3.0 -> 14.3 N, weft 3.0 -> 11.35 N (14.6 and 11.5 N with one edge of
+// each pair held and the other moved by the whole elongation).
 TEST(FabricTests, BiaxialPullsFromTheWovenState) {
   const test::Solved s = woven_then(pull_in_two(0.004, 0.5));
   ASSERT_TRUE(s.converged()) << s.result.message;
@@ -418,10 +418,10 @@ TEST(FabricTests, BiaxialPullsFromTheWovenState) {
 // Equibiaxial to 2 %: each pair of edges moves apart by half the elongation each way, so the
 // fabric's centre stays where it is, and the held components of the edges (along the other
 // axis) take almost no force. With one edge of each pair held and the other moved by the whole
-// elongation (up to session 23) the fabric's middle moved along x by strain x Lx / 2 while the
-// weft edges held their tow ends' mean: the wefts were bent in the plane and the top edge took
-// -0.65 and -2.01 N across at 1 and 2 % (2.8 % of the warp force), the warp force 72.9 N at
-// 2 % instead of 70.7 N. Measured now: -0.07 and -0.13 N (0.18 %).
+// elongation the fabric's middle moves along x by strain x Lx / 2 while the weft edges hold
+// their tow ends' mean: the wefts are bent in the plane and the top edge takes -0.65 and
+// -2.01 N across at 1 and 2 % (2.8 % of the warp force), the warp force 72.9 N at 2 % instead
+// of 70.7 N. Measured with both edges moved: -0.07 and -0.13 N (0.18 %).
 TEST(FabricTests, EquibiaxialPullMovesBothEdgesAndLeavesNoForceAcross) {
   const test::Solved s = woven_then(pull_in_two(0.02, 1.0));
   ASSERT_TRUE(s.converged()) << s.result.message;
@@ -531,12 +531,12 @@ TEST(FabricTests, BiaxialCurveIsJShaped) {
 // an equilibrium of its own friction history all the same. Here an equibiaxial pull of 0.4 %
 // and a shear of 4 degrees, each in two levels, with and without it: the levels' first
 // increments take fewer Newton iterations, and the settled edge forces differ by the
-// path-dependence of friction only. Measured (session 23, both edges of a pair moved): biaxial 7
-// iterations against 9, x+ forces 9.5132 / 9.5117 and 16.077 / 16.076 N (session 22, one edge
-// held: 10 against 13, 9.6326 / 9.584 and 16.388 / 16.298 N); shear (session 22) 8 against 30,
-// top-edge forces 0.13771 / 0.13744 and 0.5556 / 0.55523 N (ctest's single-threaded BLAS).
-// Before it: biaxial 15 against 16, shear 12 against 35 (43 when the lateral edges, free to
-// turn, took the field's translation only and not its turn; 19 with the turn linearized).
+// path-dependence of friction only. Measured (both edges of a pair moved): biaxial 7 iterations
+// against 9, x+ forces 9.5132 / 9.5117 and 16.077 / 16.076 N (one edge held: 10 against 13,
+// 9.6326 / 9.584 and 16.388 / 16.298 N); shear 8 against 30, top-edge forces 0.13771 / 0.13744
+// and 0.5556 / 0.55523 N (ctest's single-threaded BLAS). With one edge held and test_inexact = 0:
+// biaxial 15 against 16, shear 12 against 35 (43 when the lateral edges, free to turn, take the
+// field's translation only and not its turn; 19 with the turn linearized).
 TEST(FabricTests, LevelPredictorSavesIterationsNotTheCurve) {
   struct Run {
     int first_iterations = 0;    // over the levels' first increments
@@ -605,9 +605,9 @@ TestStepRun run_test_step(const std::string& keys, const std::string& step, bool
 // either way, and their forces agree to the path-dependence of friction.
 // Here an equibiaxial pull of 0.4 % and a shear of 4 degrees, each in two levels. Measured
 // (the settling solves to a hundredth of test_tolerance too): biaxial 32 Newton iterations
-// against 40, x+ forces 9.5132 / 9.5132 and 16.077 / 16.077 N (session 23, both edges of a pair
-// moved; session 22: 36 against 51, 9.6326 and 16.388 N); shear (session 22) 46 against
-// 66, top-edge forces 0.13771 / 0.13771 and 0.5556 / 0.55569 N.
+// against 40, x+ forces 9.5132 / 9.5132 and 16.077 / 16.077 N (both edges of a pair moved; with
+// one edge held 36 against 51, 9.6326 and 16.388 N); shear 46 against 66, top-edge forces
+// 0.13771 / 0.13771 and 0.5556 / 0.55569 N.
 TEST(FabricTests, InexactTestSolvesSaveIterationsNotTheCurve) {
   auto run = [](const std::string& step, double inexact, bool pull) {
     return run_test_step(fmt::format("test_inexact = {}\n", inexact), step, pull, inexact > 0 ? "inexact.toml" : "exact.toml",
@@ -641,7 +641,7 @@ TEST(FabricTests, InexactTestSolvesSaveIterationsNotTheCurve) {
 // slack, the edge forces agree, and the slack never adds a pass. On this small sample no
 // settling increment raised a penalty (nor with max_penetration 0.03 and a pull of 2 % or a
 // shear of 10 degrees): measured 24 and 34 passes, 32 and 46 Newton iterations either way
-// (the pull's 26 and 36 before session 23, one edge of each pair held).
+// (the pull's 26 and 36 with one edge of each pair held).
 TEST(FabricTests, PenetrationSlackSavesPassesNotTheCurve) {
   auto run = [](const std::string& step, double slack, bool pull) {
     return run_test_step(fmt::format("test_penetration_slack = {}\n", slack), step, pull, slack > 0 ? "slack.toml" : "cap.toml",

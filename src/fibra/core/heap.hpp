@@ -8,7 +8,7 @@ namespace fibra {
 /// to hundreds of MB (CHOLMOD's permuted copy of the matrix, the Hessian's values); glibc maps
 /// blocks above 128 kB to fresh pages and unmaps them on free, so the kernel zeroes every such
 /// block page by page again: 22 M page faults and 538 s of system time in a 40-minute 480-fiber
-/// weave and relax (docs/performance.md, session 19). Blocks of up to 2 GB then come from the
+/// weave and relax (docs/performance.md, "Memory: freed blocks kept"). Blocks of up to 2 GB then come from the
 /// heap, which keeps its freed memory. Call it first thing in main(), before any allocation that
 /// matters. Does nothing, and returns false, when the user tunes malloc through the environment
 /// (GLIBC_TUNABLES or one of the MALLOC_*_ variables); returns true once the settings are made.

@@ -133,7 +133,7 @@ class CholmodSolver final : public LinearSolver {
   /// (a 2 x 2 weave ran twice as fast on one BLAS thread; the bundle benchmark's factor, 4.4e8
   /// flops, factorizes in 828 ms on one and 900 ms on two). A 480-fiber woven sample's factor
   /// (3.2e11 flops) factorizes 1.4 times faster on two, and its solves 1.25 times
-  /// (docs/performance.md, session 12).
+  /// (docs/performance.md, "BLAS and OpenMP threads").
   int blas_threads_for_factor() const {
     return m_flops >= adaptive_blas_min_flops() ? omp_get_max_threads() : 0;
   }

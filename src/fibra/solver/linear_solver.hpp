@@ -21,7 +21,7 @@ enum class KrylovPrecision {
 };
 
 /// Factors of at least this many nonzeros precondition in single precision under Auto: there
-/// the substitutions stream hundreds of MB per CG iteration (docs/performance.md, session 19).
+/// the substitutions stream hundreds of MB per CG iteration (docs/performance.md, "The single-precision preconditioner").
 constexpr double kSingleFactorNonzeros = 1e7;
 
 /// Parses "auto", "single" or "double"; throws std::invalid_argument otherwise.
