@@ -177,7 +177,7 @@ increments = 4
   force = [0, 0, -3.3e-1]
 )");
   for (const std::string& base : {crossed, cantilever}) {
-    const Solved fresh = solve_toml(base + "\n[solver]\nkrylov_iterations = 0\n");
+    const Solved fresh = solve_toml(base, "fresh.toml", [](Case& c) { c.solver.method.krylov_iterations = 0; });
     const Solved reuse = solve_toml(base);
     ASSERT_TRUE(fresh.converged()) << fresh.result.message;
     ASSERT_TRUE(reuse.converged()) << reuse.result.message;

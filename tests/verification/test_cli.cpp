@@ -562,8 +562,8 @@ increments = 2
   }
   EXPECT_EQ(matched, 2);
 
-  // The drag columns: the weave's drag is one constant; the relax starts from relax_drag = 1e-2
-  // of the initial penalty (weave_drag: 1) and adapts; the test's levels are dragged
+  // The drag columns: the weave's drag is one constant; the relax starts from it (the stiffest
+  // drag: the initial penalty) and adapts; the test's levels are dragged
   // too and their last increments settle below the test tolerance.
   hin.clear();
   hin.seekg(0);
@@ -586,8 +586,9 @@ increments = 2
   ASSERT_FALSE(drags["pull"].empty());
   for (double d : drags["weave"]) EXPECT_DOUBLE_EQ(d, drags["weave"].front());
   EXPECT_GT(drags["weave"].front(), 0.0);
-  // relax_drag x k0, quadrupled once per failed attempt before the first accepted increment.
-  const double tries = std::log(drags["relax"].front() / (1e-2 * drags["weave"].front())) / std::log(4.0);
+  // The weave's drag: the stiffest, so a failed first attempt is cut, not stiffened.
+  EXPECT_DOUBLE_EQ(drags["relax"].front(), drags["weave"].front());
+  const double tries = std::log(drags["relax"].front() / drags["weave"].front()) / std::log(4.0);
   EXPECT_NEAR(tries, std::round(tries), 1e-9);
   EXPECT_GE(std::round(tries), 0.0);
   // After a failed attempt the drag stays above twice the drag that failed: an easy first

@@ -98,10 +98,12 @@ class Continue : public ::testing::Test {
   // From the relaxed state, sheared by 40 degrees in one level with at most max_iterations
   // Newton iterations per increment (pseudo-time solves to pseudo_tolerance).
   static Case sheared_in_one_level(int max_iterations) {
-    return continued("from = \"whole\"\nstep = \"relax\"",
-                     "[solver]\nmax_iterations = " + std::to_string(max_iterations) +
-                         "\ntest_inexact = 0\n[[step]]\nname = \"shear\"\nkind = \"shear\"\nangle = 40\nincrements = 1\n"
-                         "max_increments = 400\n");
+    Case c = continued("from = \"whole\"\nstep = \"relax\"",
+                       "[solver]\nmax_iterations = " + std::to_string(max_iterations) +
+                           "\n[[step]]\nname = \"shear\"\nkind = \"shear\"\nangle = 40\nincrements = 1\n"
+                           "max_increments = 400\n");
+    c.solver.method.test_inexact = 0.0;
+    return c;
   }
 
   static constexpr const char* kPull = "[[step]]\nname = \"pull\"\nkind = \"biaxial\"\nstrain = 0.004\nincrements = 2\n";
@@ -261,17 +263,18 @@ TEST_F(Continue, ATestGoesOnWithTheDragThatLoadedItsLastLevel) {
     if (row.at("step") != "pull") continue;
     const double lf = std::stod(row.at("load_factor"));
     if (lf > load) last_loading = std::stod(row.at("relax:drag"));
-    if (first_loading < 0.0) first_loading = last_loading;  // relax_drag (1e-2) x k0
+    if (first_loading < 0.0) first_loading = last_loading;  // the method's first drag x k0
     load = lf;
   }
   ASSERT_GT(first_loading, 0.0);
   EXPECT_DOUBLE_EQ(pulled.test_drag, last_loading);
   EXPECT_GE(pulled.test_drag, first_loading);
 
-  // Going on with relax_drag = 1e-4: without the restored drag the first increment would take
-  // 1e-4 k0, a hundredth of first_loading.
-  const Case c = continued("from = \"whole\"\nstep = \"pull\"",
-                           "[solver]\nrelax_drag = 1e-4\n[[step]]\nname = \"more\"\nkind = \"biaxial\"\nstrain = 0.002\nincrements = 1\n");
+  // Going on with a first drag of 1e-4 k0: without the restored drag the first increment
+  // would take that.
+  Case c = continued("from = \"whole\"\nstep = \"pull\"",
+                     "[[step]]\nname = \"more\"\nkind = \"biaxial\"\nstrain = 0.002\nincrements = 1\n");
+  c.solver.method.relax_drag = 1e-4;
   const RunReport r = run_in(c, "more");
   ASSERT_EQ(r.result.status, RunResult::Status::Converged) << r.result.message;
   const auto more = read_history(s_dir / "more" / "history.csv");
@@ -383,7 +386,7 @@ TEST_F(Continue, SettlingAtTheStiffestDragGetsMoreIterations) {
 TEST_F(Continue, RelaxThatCannotConvergeSaysWhy) {
   ASSERT_TRUE(s_whole);
   const Case c = continued("from = \"whole\"\nstep = \"weave\"",
-                           "[solver]\nmax_iterations = 1\nrelax_drag = 1.0\n[[step]]\nname = \"settle\"\nkind = \"relax\"\n"
+                           "[solver]\nmax_iterations = 1\n[[step]]\nname = \"settle\"\nkind = \"relax\"\n"
                            "increments = 1\n");
   const RunReport r = run_in(c, "stuck");
   ASSERT_EQ(r.result.status, RunResult::Status::Failed);

@@ -221,15 +221,13 @@ TEST(Weaving, TwillSectionsTurnAtTheEndsOfFloatsPlainSectionsStayLevel) {
 const std::string kPlainFriction = test::plain_friction_sample();
 
 /// The friction sample with a [solver] table of these keys (one per line) and these steps after it.
-std::string plain_friction_with_solver(const std::string& keys, const std::string& steps = "") {
-  std::string text = kPlainFriction + steps;
-  text.replace(text.find("[contact]"), 9, "[solver]\n" + keys + "[contact]");
-  return text;
-}
 
 TEST(Weaving, PlainWeaveWithFrictionRelaxesToEquilibrium) {
-  // This test holds the relaxed state to 1e-6 (the default relax_tolerance is 1e-4).
-  const test::Solved s = test::solve_toml(plain_friction_with_solver("relax_tolerance = 1e-6\n"), "plain_friction.toml");
+  // This test holds the relaxed state to 1e-6 (the relax step's default tolerance is 1e-4).
+  const test::Solved s = test::solve_toml(kPlainFriction, "plain_friction.toml", [](Case& c) {
+    for (StepSpec& st : c.steps)
+      if (st.kind == StepSpec::Kind::Relax) st.tolerance = 1e-6;
+  });
   ASSERT_TRUE(s.converged()) << s.result.message;
   ASSERT_EQ(s.step_end_info.size(), 2u);
   const IncrementInfo& woven = s.step_end_info[0];
@@ -543,8 +541,8 @@ TEST(FabricTests, LevelPredictorSavesIterationsNotTheCurve) {
     std::vector<double> forces;  // the driven edge's force at each settled level
   };
   auto run = [](const std::string& step, bool predictor, bool pull) {
-    const std::string text = predictor ? kPlainFriction + step : plain_friction_with_solver("test_predictor = false\n", step);
-    const test::Solved s = test::solve_toml(text, predictor ? "predicted.toml" : "unpredicted.toml");
+    const test::Solved s = test::solve_toml(kPlainFriction + step, predictor ? "predicted.toml" : "unpredicted.toml",
+                                            [predictor](Case& c) { c.solver.method.test_predictor = predictor; });
     EXPECT_TRUE(s.converged()) << s.result.message;
     Run r;
     const int driven = pull ? edges_of(s).xp : edges_of(s).yp;  // the shear's top edge, along x
@@ -580,9 +578,9 @@ struct TestStepRun {
   int iterations = 0, detections = 0;
   std::vector<double> forces;
 };
-TestStepRun run_test_step(const std::string& keys, const std::string& step, bool pull, const std::string& file,
+TestStepRun run_test_step(const std::function<void(Case&)>& method, const std::string& step, bool pull, const std::string& file,
                           const std::function<void(const test::Solved&, const IncrementInfo&, const Edges&, int driven)>& check) {
-  const test::Solved s = test::solve_toml(plain_friction_with_solver(keys, step), file);
+  const test::Solved s = test::solve_toml(kPlainFriction + step, file, method);
   EXPECT_TRUE(s.converged()) << s.result.message;
   TestStepRun r;
   const Edges e = edges_of(s);
@@ -610,7 +608,7 @@ TestStepRun run_test_step(const std::string& keys, const std::string& step, bool
 // 0.13771 / 0.13771 and 0.5556 / 0.55569 N.
 TEST(FabricTests, InexactTestSolvesSaveIterationsNotTheCurve) {
   auto run = [](const std::string& step, double inexact, bool pull) {
-    return run_test_step(fmt::format("test_inexact = {}\n", inexact), step, pull, inexact > 0 ? "inexact.toml" : "exact.toml",
+    return run_test_step([inexact](Case& c) { c.solver.method.test_inexact = inexact; }, step, pull, inexact > 0 ? "inexact.toml" : "exact.toml",
                          [inexact](const test::Solved&, const IncrementInfo& i, const Edges& e, int driven) {
                            // An equilibrium without drag to the test tolerance: the edge forces balance.
                            EXPECT_LT(edge_force_sum(i, e).norm(), 1e-3 * std::abs(i.bodies[e.xp].force.x()) +
@@ -644,7 +642,7 @@ TEST(FabricTests, InexactTestSolvesSaveIterationsNotTheCurve) {
 // (the pull's 26 and 36 with one edge of each pair held).
 TEST(FabricTests, PenetrationSlackSavesPassesNotTheCurve) {
   auto run = [](const std::string& step, double slack, bool pull) {
-    return run_test_step(fmt::format("test_penetration_slack = {}\n", slack), step, pull, slack > 0 ? "slack.toml" : "cap.toml",
+    return run_test_step([slack](Case& c) { c.solver.method.test_penetration_slack = slack; }, step, pull, slack > 0 ? "slack.toml" : "cap.toml",
                          [slack](const test::Solved& s, const IncrementInfo& i, const Edges&, int) {
                            const double cap = s.c.contact.max_penetration;
                            EXPECT_LE(i.contact.max_penetration_ratio, (1.0 + slack) * cap * (1.0 + 1e-9))

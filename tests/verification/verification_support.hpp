@@ -48,10 +48,13 @@ struct Solved {
   Vec3 u(Index local, int fiber = 0) const { return x0(local, fiber) - ref_x0(local, fiber); }
 };
 
-/// Parses `toml` and solves it with StaticSolver (no output files).
-inline Solved solve_toml(const std::string& toml, const std::string& label = "verification.toml") {
+/// Parses `toml`, lets `edit` change the case (the solver's method rules, which case files do
+/// not set), and solves it with StaticSolver (no output files).
+inline Solved solve_toml(const std::string& toml, const std::string& label = "verification.toml",
+                         const std::function<void(Case&)>& edit = {}) {
   Solved s;
   s.c = parse_case_toml(toml, label);
+  if (edit) edit(s.c);
   s.model = build_model(s.c);
   StaticSolver solver(s.c, s.model);
   s.result = solver.run([&](const IncrementInfo& info, const VecX& q) {

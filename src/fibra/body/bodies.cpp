@@ -154,9 +154,9 @@ BodySystem::BodySystem(const Case& c, const Model& model) : m_model(model) {
                                      body.name, why));
       }
       bd.s = std::sqrt(sum2 / n);
-      bd.k = c.solver.binding_stiffness > 0.0 ? c.solver.binding_stiffness : 100.0 * k_ref * count;
+      bd.k = c.solver.method.binding_stiffness > 0.0 ? c.solver.method.binding_stiffness : 100.0 * k_ref * count;
       // A grip condition holds one node: the stiffness the averaged position gives its mean.
-      bd.kg = c.solver.binding_stiffness > 0.0 ? c.solver.binding_stiffness : 100.0 * k_ref;
+      bd.kg = c.solver.method.binding_stiffness > 0.0 ? c.solver.method.binding_stiffness : 100.0 * k_ref;
       m_bodies[b].size = std::max(m_bodies[b].size, bd.s);
       node_count[b] += count;
     }

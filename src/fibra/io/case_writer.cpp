@@ -250,6 +250,7 @@ void write_step(std::string& out, const StepSpec& s) {
     out += fmt::format("angle = {}\n", number(s.angle));
     if (s.free_height) out += "height = \"free\"\n";
   }
+  if (s.is_proximal()) out += fmt::format("tolerance = {}\n", number(s.tolerance));
   out += fmt::format("increments = {}\n", s.increments);
   out += fmt::format("max_increments = {}\n", s.max_increments);
   for (const LoadSpec& l : s.loads) {
@@ -279,25 +280,10 @@ void write_solver(std::string& out, const SolverSpec& s) {
   out += fmt::format("displacement_tolerance = {}\n", number(s.displacement_tolerance));
   out += fmt::format("max_iterations = {}\n", s.max_iterations);
   out += fmt::format("max_cuts = {}\n", s.max_cuts);
-  out += fmt::format("line_search = {}\n", s.line_search ? "true" : "false");
-  out += fmt::format("test_predictor = {}\n", s.test_predictor ? "true" : "false");
   out += fmt::format("linear_solver = {}\n", quoted(s.linear_solver));
-  out += fmt::format("ordering = {}\n", quoted(s.ordering));
-  if (s.max_step >= 0) out += fmt::format("max_step = {}\n", number(s.max_step));  // < 0: automatic
+  out += fmt::format("krylov_precision = {}\n", quoted(s.krylov_precision));
   out += fmt::format("binding_tolerance = {}\n", number(s.binding_tolerance));
   out += fmt::format("max_binding_updates = {}\n", s.max_binding_updates);
-  out += fmt::format("binding_stiffness = {}\n", number(s.binding_stiffness));
-  out += fmt::format("weave_drag = {}\n", number(s.weave_drag));
-  out += fmt::format("relax_drag = {}\n", number(s.relax_drag));
-  out += fmt::format("drag_axial = {}\n", number(s.drag_axial));
-  out += fmt::format("relax_tolerance = {}\n", number(s.relax_tolerance));
-  out += fmt::format("test_tolerance = {}\n", number(s.test_tolerance));
-  out += fmt::format("test_inexact = {}\n", number(s.test_inexact));
-  out += fmt::format("test_penetration_slack = {}\n", number(s.test_penetration_slack));
-  out += fmt::format("pseudo_tolerance = {}\n", number(s.pseudo_tolerance));
-  out += fmt::format("krylov_iterations = {}\n", s.krylov_iterations);
-  out += fmt::format("krylov_tolerance = {}\n", number(s.krylov_tolerance));
-  out += fmt::format("krylov_precision = {}\n", quoted(s.krylov_precision));
 }
 
 void write_contact(std::string& out, const ContactSpec& c) {

@@ -200,6 +200,10 @@ struct StepSpec {
   /// 1/cos(angle) - 1), or free (the top edge keeps the force it had across: the wefts keep
   /// their tension and the sample's height shrinks as it shears).
   bool free_height = false;
+  /// relax: the step ends once the drag's force is below this fraction of the reference
+  /// force; biaxial, shear: a load level is a point of the curves once it is (each point is
+  /// an equilibrium to this tolerance).
+  double tolerance = 1e-4;
   int increments = 1;      ///< initial number of increments (the solver adapts)
   int max_increments = 0;  ///< 0 = 100 * increments
   std::vector<LoadSpec> loads;
@@ -207,31 +211,41 @@ struct StepSpec {
   std::vector<BodyStepSpec> bodies;  ///< [[step.body]] entries
 };
 
-/// Nonlinear solver settings ([solver] table).
+/// The fixed rules of the nonlinear method (docs/theory/solver.md). They are not case-file
+/// keys: a user sets tolerances and limits ([solver]), the method sets itself. Tests and
+/// benchmarks vary them to measure what each rule does.
+struct SolverMethod {
+  bool line_search = true;                ///< backtracking on stick-slip cycles and rising residuals
+  std::string ordering = "metis";         ///< CHOLMOD fill-reducing ordering: "metis", "amd" or "auto"
+  double weave_drag = 1.0;                ///< drag per node in weave steps, relative to the contact penalty k0
+  /// First proximal drag of a relax or test step, relative to k0: the weave's (the stiffest);
+  /// easy increments divide it by 4.
+  double relax_drag = 1.0;
+  double drag_axial = 1e-2;               ///< weave, relax and test steps' drag: weight of a node's motion along its fiber (1: isotropic)
+  double test_inexact = 0.01;             ///< tests: Newton tolerance of pseudo-time increments / the drag force they leave, of settling ones / the step's tolerance (0: off)
+  double test_penetration_slack = 0.05;   ///< tests: a settled level's deepest penetration may exceed the cap by this fraction
+  bool test_predictor = true;             ///< tests: each load level starts from the interior moved like the edges (interpolated)
+  double pseudo_tolerance = 1e-6;         ///< Newton tolerance of pseudo-time increments (weave; relax/test while the drag force is above its tolerance)
+  /// CG iterations preconditioned by the last factorization before a new one: < 0 = the
+  /// factorization's price in CG iterations, from its flops (automatic); 0 = factorize every
+  /// iteration; > 0 = that many.
+  int krylov_iterations = -1;
+  double krylov_tolerance = 1e-3;         ///< CG stops at this residual relative to the Newton residual (inexact Newton)
+  double max_step = -1;                   ///< largest motion per Newton iteration [m]; < 0 = half the smallest radius with contact, none without; 0 = none
+  double binding_stiffness = 0;           ///< penalty of the augmented Lagrangian [N/m]; 0 = automatic
+};
+
+/// Nonlinear solver settings ([solver] table): tolerances, limits and the linear solver.
 struct SolverSpec {
   double residual_tolerance = 1e-8;      ///< relative to the reference force
   double displacement_tolerance = 1e-8;   ///< largest correction, relative to the model size
   int max_iterations = 25;               ///< Newton iterations per increment
   int max_cuts = 12;                     ///< successive halvings of an increment
-  bool line_search = true;
   std::string linear_solver = "cholmod";  ///< "cholmod" or "eigen"
-  std::string ordering = "metis";         ///< CHOLMOD fill-reducing ordering: "metis", "amd" or "auto"
-  double weave_drag = 1.0;                ///< drag per node in weave steps, relative to the contact penalty
-  double relax_drag = 1e-2;               ///< initial proximal drag per node in relax steps, relative to it
-  double drag_axial = 1e-2;               ///< weave, relax and test steps' drag: weight of a node's motion along its fiber (1: isotropic)
-  double relax_tolerance = 1e-4;          ///< relax steps end when the drag's force is below this (relative)
-  double test_tolerance = 1e-4;           ///< biaxial/shear: a load level is an equilibrium when the drag's force is below this (relative)
-  double test_inexact = 0.01;             ///< biaxial/shear with a drag: Newton tolerance of pseudo-time increments / the drag force they leave, of settling ones / test_tolerance (0: off)
-  double test_penetration_slack = 0.05;   ///< biaxial/shear with a drag: a settled level's deepest penetration may exceed the cap by this fraction (raises wait for the next increment)
-  bool test_predictor = true;             ///< biaxial/shear: each load level starts from the interior moved like the edges (interpolated)
-  double pseudo_tolerance = 1e-6;         ///< Newton tolerance of pseudo-time increments (weave; relax/test while the drag force is above its tolerance)
-  int krylov_iterations = 20;             ///< CG iterations preconditioned by the last factorization; 0 = factorize every iteration
-  double krylov_tolerance = 1e-3;         ///< CG stops at this residual relative to the Newton residual (inexact Newton)
   std::string krylov_precision = "auto";  ///< CG's preconditioning factor: "single" (rounded to floats), "double", "auto" (single for large factors)
-  double max_step = -1;                   ///< largest motion per Newton iteration [m]; < 0 = automatic (half the smallest radius with contact, none without), 0 = none
   double binding_tolerance = 1e-8;        ///< largest binding violation, relative to the model size
   int max_binding_updates = 30;           ///< multiplier updates per increment (augmented Lagrangian)
-  double binding_stiffness = 0;           ///< penalty of the augmented Lagrangian [N/m]; 0 = automatic
+  SolverMethod method;                    ///< not read from case files
 };
 
 /// Contact and friction settings ([contact] table); contact is off when the table is absent.

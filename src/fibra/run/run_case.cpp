@@ -197,7 +197,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     }
     // A test level's pseudo-time increments (its drag still pulls) are not states of the
     // fabric: by default only each level's settled state, a point of the curves, is written.
-    const bool levels_only = c.output.test_levels && st.is_test() && solver.has_contact() && c.solver.relax_drag > 0.0;
+    const bool levels_only = c.output.test_levels && st.is_test() && solver.has_contact() && c.solver.method.relax_drag > 0.0;
     const bool vtu = info.step_end || (levels_only ? info.settled : info.total_increments % c.output.every == 0);
     std::vector<BodyPoint> body_points;
     if (vtu && bodies)
@@ -317,7 +317,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   if (!c.start.empty()) j["start"] = {{"from", c.start}, {"step", c.start_step}, {"file", c.start_state}};
   j["states"] = states;
   j["solver"] = {{"linear_solver", c.solver.linear_solver},
-                 {"ordering", c.solver.ordering},
+                 {"ordering", c.solver.method.ordering},
                  {"threads", omp_get_max_threads()},
                  {"increments", s.increments},
                  {"iterations", s.iterations},

@@ -41,6 +41,21 @@ struct StaticSolver::Program {
 };
 
 namespace {
+
+// The CG iterations preconditioned by an older factorization that a new one is worth: the
+// budget of a solve before it gives up, and of the solves since the last factorization beyond
+// the first one's iterations. Automatic (setting < 0): a factorization's flops over 16 times
+// its factor's nonzeros, between 20 and 100. A CG iteration's substitutions do about 4 flops
+// per factor nonzero at memory speed, the factorization its flops at BLAS-3 speed, some 4 times
+// faster per flop on these machines: a factorization of the 480-fiber woven samples (3.2e11
+// flop, 1.9e8 nonzeros) is worth ~100 iterations (docs/theory/solver.md, "Reusing the
+// factorization"); a small model's factor, cheap anyway, gets 20. From flop counts, not timings,
+// so that the solver's path is the same from run to run.
+int krylov_budget(int setting, double flops, double nonzeros) {
+  if (setting >= 0) return setting;
+  if (!(flops > 0.0 && nonzeros > 0.0)) return 20;
+  return static_cast<int>(std::clamp(std::round(flops / (16.0 * nonzeros)), 20.0, 100.0));
+}
 constexpr double kDirectorDrag = 100.0;  // weight of the section vectors' drag in weave and relax steps
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -52,7 +67,7 @@ StaticSolver::StaticSolver(const Case& c, const Model& model)
     : m_case(c), m_model(model),
       m_bodies(model.bodies.empty() ? nullptr : std::make_unique<BodySystem>(c, model)),
       m_problem(std::make_unique<Problem>(model, m_bodies.get())),
-      m_linear(make_linear_solver(c.solver.linear_solver, c.solver.ordering)), m_program(std::make_unique<Program>()),
+      m_linear(make_linear_solver(c.solver.linear_solver, c.solver.method.ordering)), m_program(std::make_unique<Program>()),
       m_q(model.reference) {
   m_linear->set_krylov_precision(krylov_precision_from(c.solver.krylov_precision));
   const Index n = model.num_dofs();
@@ -147,9 +162,9 @@ StaticSolver::StaticSolver(const Case& c, const Model& model)
     double rmin = std::numeric_limits<double>::infinity();
     for (const Fiber& f : model.fibers)
       rmin = std::min(rmin, std::sqrt(model.sections[f.section].a * model.sections[f.section].b));
-    m_max_step = c.solver.max_step >= 0.0 ? c.solver.max_step : 0.5 * rmin;
+    m_max_step = c.solver.method.max_step >= 0.0 ? c.solver.method.max_step : 0.5 * rmin;
   } else {
-    m_max_step = std::max(0.0, c.solver.max_step);
+    m_max_step = std::max(0.0, c.solver.method.max_step);
   }
   m_q_start = m_q;
   m_drag_anchor = m_q;
@@ -224,8 +239,8 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   // Weaving: along a fiber the drag is weaker (drag_axial), so the fibers slide along
   // themselves as the tows crimp and the edges draw in, instead of stretching against a drag
   // that holds every node (docs/theory/fabric.md, "Drag along the fibers").
-  m_problem->set_drag(weave ? m_case.solver.weave_drag * k0 : relax ? m_relax_drag : 0.0, m_drag_anchor,
-                      weave || relax ? kDirectorDrag : 1.0, weave || relax ? m_case.solver.drag_axial : 1.0);
+  m_problem->set_drag(weave ? m_case.solver.method.weave_drag * k0 : relax ? m_relax_drag : 0.0, m_drag_anchor,
+                      weave || relax ? kDirectorDrag : 1.0, weave || relax ? m_case.solver.method.drag_axial : 1.0);
 
   // METHOD §4: (1) contact elements, repeated while the set changes; (2) normals, repeated
   // while they turn; (3) Newton on the rest. A zone that penetrates too deep gets a stiffer
@@ -292,7 +307,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     // A lagged increment is a pseudo-time state, not an equilibrium: its drag force is above
     // the relax tolerance, so its Newton solves stop at the looser pseudo_tolerance (and the
     // correction at the displacement tolerance scaled alike).
-    m_newton_tolerance = lagged ? std::max(m_case.solver.pseudo_tolerance, m_case.solver.residual_tolerance)
+    m_newton_tolerance = lagged ? std::max(m_case.solver.method.pseudo_tolerance, m_case.solver.residual_tolerance)
                                 : m_case.solver.residual_tolerance;
     // Tests (biaxial, shear) with a drag: each solve only as exact as the state it is part of.
     // A lagged increment is a step of a proximal-point sequence whose drag force, relative to
@@ -314,8 +329,8 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     m_tolerance_scale = 1.0;
     const bool test_with_drag = relax && m_relax_drag > 0.0 && m_case.steps[step].is_test();
     if (test_with_drag) {
-      const double expected = !lagged ? m_case.solver.test_tolerance : m_loading ? m_load_residual : m_relax_residual;
-      const double loose = m_case.solver.test_inexact * expected;
+      const double expected = !lagged ? m_case.steps[step].tolerance : m_loading ? m_load_residual : m_relax_residual;
+      const double loose = m_case.solver.method.test_inexact * expected;
       if (loose > m_newton_tolerance) {
         m_tolerance_scale = loose / m_newton_tolerance;
         m_newton_tolerance = loose;
@@ -347,8 +362,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       if (!m_normals_settled && relax && !lagged) {
         const double moved = normal_update_residual();
         if (debug_newton()) fmt::print(stderr, " residual with the new normals and cones {:.3e}\n", moved);
-        m_normals_settled = moved <= (m_case.steps[step].is_test() ? m_case.solver.test_tolerance
-                                                                   : m_case.solver.relax_tolerance);
+        m_normals_settled = moved <= m_case.steps[step].tolerance;
         stalled = moved > 0.5 * last_moved;
         last_moved = moved;
       }
@@ -408,9 +422,9 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     // zones raised at each; 36 Newton iterations, 200 s), each pass a solve to the tolerance
     // for a few zones' penetration of a few tenths of a percent of the cap.
     const bool test_settling = test_with_drag && !lagged;
-    const double cap = lagged ? 2.0 : test_settling ? 1.0 + m_case.solver.test_penetration_slack : 1.0;
+    const double cap = lagged ? 2.0 : test_settling ? 1.0 + m_case.solver.method.test_penetration_slack : 1.0;
     const bool same = weave || ((lagged || !fresh_penetrate) && deepest <= cap);
-    const bool deferred = lagged || (test_settling && m_case.solver.test_penetration_slack > 0.0);
+    const bool deferred = lagged || (test_settling && m_case.solver.method.test_penetration_slack > 0.0);
     if (debug_newton() && !weave) {
       size_t fresh = 0;
       for (const ContactElement& c : contacts) fresh += c.fresh ? 1 : 0;
@@ -735,10 +749,10 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     double shift = 0.0;
     bool solved = false;
     m_rhs = -r;
-    if (opt.krylov_iterations > 0 && m_reuse_factor && m_linear->has_factor()) {
+    if (m_krylov_budget > 0 && m_reuse_factor && m_linear->has_factor()) {
       const PcgResult cg = pcg(
           m_problem->pattern(), m_hessian, 0.0, m_rhs, dq, [this](const VecX& b, VecX& x) { m_linear->precondition(b, x); },
-          m_force_scale, opt.krylov_tolerance, opt.krylov_iterations, m_pcg);
+          m_force_scale, opt.method.krylov_tolerance, m_krylov_budget, m_pcg);
       m_stats.krylov_iterations += cg.iterations;
       solved = cg.converged;
       if (debug_newton()) {
@@ -763,7 +777,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
         if (m_fresh_cg < 0) m_fresh_cg = cg.iterations;
         m_cg_excess += std::max(0, cg.iterations - m_fresh_cg);
       }
-      m_reuse_factor = solved && 2 * cg.iterations <= opt.krylov_iterations && m_cg_excess < opt.krylov_iterations;
+      m_reuse_factor = solved && 2 * cg.iterations <= m_krylov_budget && m_cg_excess < m_krylov_budget;
       m_stats.time_solve += seconds_since(t0);
     }
     if (!solved) {
@@ -795,6 +809,8 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       }
       m_cg_excess = 0;
       m_fresh_cg = -1;
+      m_krylov_budget = krylov_budget(opt.method.krylov_iterations, m_linear->factor_flops(),
+                                      m_linear->factor_nonzeros());
       if (debug_newton()) fmt::print(stderr, "  it {:2d} factorized ({:.2f} s)\n", iterations, seconds_since(t0));
       m_stats.factor_nonzeros = m_linear->factor_nonzeros();
       if (st != FactorStatus::Ok) return false;
@@ -839,7 +855,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
         (searching && history[k - 1] > 1e3 * opt.residual_tolerance) || (k >= first + 4 && history[k - 1] > history[k - 2]) ||
         (k >= first + 7 && history[k - 1] > 1e3 * m_newton_tolerance &&
          history[k - 1] > 0.9 * std::min({history[k - 2], history[k - 3], history[k - 4]}));
-    if (!searching && opt.line_search && stalled && m_problem->drag() > 0.0) {
+    if (!searching && opt.method.line_search && stalled && m_problem->drag() > 0.0) {
       searching = true;
       ++m_stats.searched_solves;
     }
@@ -861,7 +877,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       }
     }
     trial = m_q + dq;
-    if (opt.line_search && stalled && s0 < 0.0) {
+    if (opt.method.line_search && stalled && s0 < 0.0) {
       const double e0 = m_problem->evaluate(m_q, nullptr, nullptr);
       const double noise = 1e-11 * std::abs(e0) + 1e-14 * std::abs(s0);
       double e1 = m_problem->evaluate(trial, nullptr, nullptr);
@@ -1244,12 +1260,12 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     // Biaxial and shear steps (tests of a woven fabric) take the same proximal increments, and
     // each load level is repeated at the same load factor until its drag force is negligible
     // and its normals settled: every point of their curves is an equilibrium without drag.
-    const bool relax = st.is_proximal() && m_contact && opt.relax_drag > 0.0;
+    const bool relax = st.is_proximal() && m_contact && opt.method.relax_drag > 0.0;
     const bool test = relax && st.is_test();
     bool level_settled = true;  // stays true but in tests, where a level repeats until it settles
     const double k0 = m_contact ? m_contact->initial_stiffness() : 0.0;
-    const double relax_max = std::max(opt.weave_drag, opt.relax_drag) * k0, relax_min = 1e-9 * k0;
-    m_relax_drag = relax ? opt.relax_drag * k0 : 0.0;
+    const double relax_max = std::max(opt.method.weave_drag, opt.method.relax_drag) * k0, relax_min = 1e-9 * k0;
+    m_relax_drag = relax ? opt.method.relax_drag * k0 : 0.0;
     // Twice the last drag that failed: the drag does not fall straight back to a level that
     // just failed (each failure costs a whole Newton solve; on the 480-fiber relax the drag went
     // 35 (failed), 141 (failed), 563, then 141 again). How fast the floor falls depends on how
@@ -1315,7 +1331,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       // A test level's first increment starts from the interior moved as the edges move (the
       // drag then holds it there, not at the last level's state); friction slips and crossings
       // are still measured from the last level's state.
-      if (test && step_dl > 0.0 && opt.test_predictor) predict_test_level(step, lambda + step_dl);
+      if (test && step_dl > 0.0 && opt.method.test_predictor) predict_test_level(step, lambda + step_dl);
       // Load steps (no drag, no weaving): an increment starts from the last converged state
       // moved on by the last increment's motion scaled to this one's size (a secant
       // predictor), not from that state with only the prescribed dofs moved: the first
@@ -1427,12 +1443,12 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         if (m_loading) m_load_residual = m_relax_residual;
         const bool loaded = lambda + step_dl >= 1.0 - 1e-12;
         if (test) {
-          level_settled = m_relax_residual <= opt.test_tolerance && m_normals_settled;
+          level_settled = m_relax_residual <= st.tolerance && m_normals_settled;
           relaxed = loaded && level_settled;
-          m_relax_settling = m_relax_residual <= opt.test_tolerance && !level_settled;
+          m_relax_settling = m_relax_residual <= st.tolerance && !level_settled;
         } else {
-          relaxed = loaded && m_relax_residual <= opt.relax_tolerance && m_normals_settled;
-          m_relax_settling = loaded && m_relax_residual <= opt.relax_tolerance;
+          relaxed = loaded && m_relax_residual <= st.tolerance && m_normals_settled;
+          m_relax_settling = loaded && m_relax_residual <= st.tolerance;
         }
         // Easy increments: the drag falls, faster the easier they were. Once its force is
         // below the tolerance and only the normals are left to settle, it stays: a weaker drag
@@ -1440,7 +1456,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         // from 8.8 to 4.4 N/m and failed there after 25 iterations).
         const double fall = m_relax_settling ? 1.0 : iterations <= 12 ? 0.25 : iterations <= 30 ? 0.5 : 1.0;
         m_relax_drag = std::max(std::max(fall * m_relax_drag, relax_min), std::min(failed_floor, relax_max));
-        const double tolerance = test ? opt.test_tolerance : opt.relax_tolerance;
+        const double tolerance = test ? st.tolerance : st.tolerance;
         failed_floor *= m_relax_residual > 100.0 * tolerance ? fall : 0.7;
       }
       if (!relax && !weave_step && step_dl > 0.0) {

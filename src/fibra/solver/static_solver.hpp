@@ -175,6 +175,7 @@ class StaticSolver {
   bool m_normals_settled = true;  // the last increment's normals and friction cones were a fixed point
   bool m_reuse_factor = false;    // the last factorization may precondition the next Newton solve
   double m_last_shift = 0;        // last shift a factorization needed, relative to its tangent's mean diagonal
+  int m_krylov_budget = 20;       // CG iterations a factorization is worth (krylov_budget())
   int m_cg_excess = 0;            // CG iterations since the last factorization beyond the first solve's, summed
   int m_fresh_cg = -1;            // iterations of the first CG solve after the last factorization (-1: none yet)
   VecX m_rhs;                     // right-hand side of the Newton solve
