@@ -306,6 +306,8 @@ void prepare_output_dir(const std::string& dir_in, const std::vector<std::string
                                   "(give another --out directory)"
                                 : "exists and is not a directory: the run writes into this subfolder of the "
                                   "output directory (remove the file or give another --out directory)");
+    // A missing subfolder is made when the run first writes into it (the directory takes it).
+    if (d != dir && !fs::exists(d, ec)) continue;
     fs::create_directories(d, ec);
     if (ec || !fs::is_directory(d, ec))
       throw InputError(d.string(), "(output directory)",

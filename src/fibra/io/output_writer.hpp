@@ -53,16 +53,17 @@ struct BodyPoint {
   std::vector<Vec3> members;       ///< current positions of its bound members (nodes or body centres)
 };
 
-/// Creates the output directory `dir` and its subfolders `subdirs` (relative to it) and checks
-/// that each takes a new file. Throws InputError naming the path when one is a file, cannot be
+/// Creates the output directory `dir` and checks that it and those of its subfolders `subdirs`
+/// (relative to it) that exist take a new file; a missing subfolder is left to be made when it
+/// is first written into. Throws InputError naming the path when one is a file, cannot be
 /// created or cannot be written into, so that a run stops before it starts.
 void prepare_output_dir(const std::string& dir, const std::vector<std::string>& subdirs);
 
 /// Writes all output files of a run into one directory.
 class OutputWriter {
  public:
-  /// Creates `dir` (and parents) and its subfolders fibers/ and lines/ (prepare_output_dir:
-  /// InputError when it cannot be written), opens history.csv with header: step,step_index,increment,load_factor,iterations,residual,wall_time, then the `extra_columns` names (e.g. reaction:beam:first:x).
+  /// Creates `dir` (and parents) and checks it and its subfolders fibers/ and lines/
+  /// (prepare_output_dir: InputError when one cannot be written), opens history.csv with header: step,step_index,increment,load_factor,iterations,residual,wall_time, then the `extra_columns` names (e.g. reaction:beam:first:x).
   OutputWriter(std::string dir, const Model& model, std::vector<std::string> extra_columns, int tube_sides);
   /// Closes history.csv.
   ~OutputWriter();

@@ -29,8 +29,8 @@ namespace fibra {
 
 namespace {
 
-/// The subfolders a run of `c` writes into: the ParaView series, the states, and the slices
-/// and plots of a woven sample's steps.
+/// The subfolders a run of `c` writes into (prepare_output_dir checks those already there):
+/// the ParaView series, the states, and the slices and plots of a woven sample's steps.
 std::vector<std::string> output_subdirs(const Case& c) {
   std::vector<std::string> dirs = {"fibers", "lines", "state"};
   if (c.contact.enabled) dirs.push_back("contacts");
