@@ -1,6 +1,7 @@
 /// Tests of the output layer: history.csv, nodes.csv, .vtu/.pvd and summary.json.
 #include <gtest/gtest.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -250,9 +251,9 @@ TEST_F(OutputWriterTest, VtuAndPvdRoundTrip) {
     const auto entries = read_pvd(m_dir / (prefix + ".pvd"));
     ASSERT_EQ(entries.size(), 2u) << prefix;
     EXPECT_EQ(entries[0].first, 0.0);
-    EXPECT_EQ(entries[0].second, prefix + "_000000.vtu");
+    EXPECT_EQ(entries[0].second, prefix + "/" + prefix + "_000000.vtu");
     EXPECT_EQ(entries[1].first, 1.0);
-    EXPECT_EQ(entries[1].second, prefix + "_000001.vtu");
+    EXPECT_EQ(entries[1].second, prefix + "/" + prefix + "_000001.vtu");
     for (const auto& e : entries) EXPECT_TRUE(fs::exists(m_dir / e.second)) << e.second;
   }
   for (const auto& entry : fs::directory_iterator(m_dir))
@@ -262,7 +263,7 @@ TEST_F(OutputWriterTest, VtuAndPvdRoundTrip) {
   const Section& sec = model.sections[model.fibers[0].section];
 
   // Tube surface of the deformed state.
-  const Vtu tubes = read_vtu(m_dir / "fibers_000001.vtu");
+  const Vtu tubes = read_vtu(m_dir / "fibers" / "fibers_000001.vtu");
   ASSERT_EQ(tubes.points, static_cast<size_t>(n_nodes * sides));
   ASSERT_EQ(tubes.cells, static_cast<size_t>((n_nodes - 1) * sides));
   EXPECT_EQ(tubes.types.at("displacement"), "Float64");
@@ -315,7 +316,7 @@ TEST_F(OutputWriterTest, VtuAndPvdRoundTrip) {
   }
 
   // Centroid lines of the deformed state.
-  const Vtu lines = read_vtu(m_dir / "lines_000001.vtu");
+  const Vtu lines = read_vtu(m_dir / "lines" / "lines_000001.vtu");
   ASSERT_EQ(lines.points, static_cast<size_t>(n_nodes));
   ASSERT_EQ(lines.cells, 1u);
   EXPECT_EQ(lines.get<std::uint8_t>("types")[0], 4);  // VTK_POLY_LINE
@@ -338,7 +339,7 @@ TEST_F(OutputWriterTest, VtuAndPvdRoundTrip) {
   EXPECT_EQ(lines.get<double>("TimeValue").at(0), 1.0);
 
   // The reference state has zero displacement, strain and force.
-  const Vtu ref = read_vtu(m_dir / "fibers_000000.vtu");
+  const Vtu ref = read_vtu(m_dir / "fibers" / "fibers_000000.vtu");
   for (double u : ref.get<double>("displacement")) EXPECT_EQ(u, 0.0);
   for (double e : ref.get<double>("axial_strain")) EXPECT_NEAR(e, 0.0, 1e-12);
   for (double n : ref.get<double>("axial_force")) EXPECT_NEAR(n, 0.0, 1e-6);
@@ -372,27 +373,27 @@ TEST_F(OutputWriterTest, BodiesVtuAndPvd) {
   const std::vector<BodyPoint> bodies = make_bodies();
   // The reference state is written without bodies: no bodies files at all.
   out.write_increment(model.reference, row(0, 0.0, {}), 0.0, true);
-  EXPECT_FALSE(fs::exists(m_dir / "bodies_000000.vtu"));
+  EXPECT_FALSE(fs::exists(m_dir / "bodies" / "bodies_000000.vtu"));
   EXPECT_FALSE(fs::exists(m_dir / "bodies.pvd"));
   // An empty list writes nothing either; an increment without vtu neither.
   const std::vector<BodyPoint> none;
   out.write_increment(model.reference, row(1, 0.25, {}), 0.25, false, nullptr, &bodies);
   out.write_increment(model.reference, row(2, 0.5, {}), 0.5, true, nullptr, &none);
-  EXPECT_FALSE(fs::exists(m_dir / "bodies_000001.vtu"));
+  EXPECT_FALSE(fs::exists(m_dir / "bodies" / "bodies_000001.vtu"));
   EXPECT_FALSE(fs::exists(m_dir / "bodies.pvd"));
   EXPECT_EQ(out.vtu_count(), 2);
 
   // Numbered like the fibers file of the same increment.
   out.write_increment(deformed_state(model), row(3, 1.0, {}), 1.0, true, nullptr, &bodies);
-  ASSERT_TRUE(fs::exists(m_dir / "fibers_000002.vtu"));
-  ASSERT_TRUE(fs::exists(m_dir / "bodies_000002.vtu"));
+  ASSERT_TRUE(fs::exists(m_dir / "fibers" / "fibers_000002.vtu"));
+  ASSERT_TRUE(fs::exists(m_dir / "bodies" / "bodies_000002.vtu"));
   auto entries = read_pvd(m_dir / "bodies.pvd");
   ASSERT_EQ(entries.size(), 1u);
   EXPECT_EQ(entries[0].first, 1.0);
-  EXPECT_EQ(entries[0].second, "bodies_000002.vtu");
+  EXPECT_EQ(entries[0].second, "bodies/bodies_000002.vtu");
   EXPECT_EQ(read_pvd(m_dir / "fibers.pvd").size(), 3u);
 
-  const Vtu vtu = read_vtu(m_dir / "bodies_000002.vtu");
+  const Vtu vtu = read_vtu(m_dir / "bodies" / "bodies_000002.vtu");
   ASSERT_EQ(vtu.points, 2u + 3u);
   ASSERT_EQ(vtu.cells, 2u + 3u);
   EXPECT_EQ(vtu.get<double>("TimeValue").at(0), 1.0);
@@ -404,7 +405,7 @@ TEST_F(OutputWriterTest, BodiesVtuAndPvd) {
   EXPECT_EQ(vtu.get<std::int64_t>("connectivity"), (std::vector<std::int64_t>{0, 1, 0, 2, 0, 3, 0, 4}));
   EXPECT_EQ(vtu.types.at("kind"), "Int32");
   EXPECT_EQ(vtu.get<std::int32_t>("kind"), (std::vector<std::int32_t>{0, 0, 1, 1, 1}));
-  const std::string text = read_text(m_dir / "bodies_000002.vtu");
+  const std::string text = read_text(m_dir / "bodies" / "bodies_000002.vtu");
   const size_t cell_data = text.find("<CellData");
   ASSERT_NE(cell_data, std::string::npos);
   EXPECT_LT(text.find("</PointData>"), cell_data);
@@ -456,7 +457,7 @@ TEST_F(OutputWriterTest, BodiesVtuAndPvd) {
   entries = read_pvd(m_dir / "bodies.pvd");
   ASSERT_EQ(entries.size(), 2u);
   EXPECT_EQ(entries[1].first, 2.0);
-  EXPECT_EQ(entries[1].second, "bodies_000003.vtu");
+  EXPECT_EQ(entries[1].second, "bodies/bodies_000003.vtu");
   for (const auto& e : entries) EXPECT_TRUE(fs::exists(m_dir / e.second)) << e.second;
   for (const auto& entry : fs::directory_iterator(m_dir))
     EXPECT_NE(entry.path().extension(), ".tmp") << entry.path();
@@ -464,7 +465,7 @@ TEST_F(OutputWriterTest, BodiesVtuAndPvd) {
   // A new writer in the same directory removes the bodies files of this run.
   OutputWriter again(m_dir.string(), model, {}, 6);
   EXPECT_FALSE(fs::exists(m_dir / "bodies.pvd"));
-  EXPECT_FALSE(fs::exists(m_dir / "bodies_000002.vtu"));
+  EXPECT_FALSE(fs::exists(m_dir / "bodies" / "bodies_000002.vtu"));
 }
 
 TEST_F(OutputWriterTest, WithoutBodiesNoBodiesFiles) {
@@ -472,7 +473,7 @@ TEST_F(OutputWriterTest, WithoutBodiesNoBodiesFiles) {
   OutputWriter out(m_dir.string(), model, {}, 6);
   out.write_increment(model.reference, row(0, 0.0, {}), 0.0, true);
   out.write_increment(deformed_state(model), row(1, 1.0, {}), 1.0, true);
-  EXPECT_TRUE(fs::exists(m_dir / "fibers_000001.vtu"));
+  EXPECT_TRUE(fs::exists(m_dir / "fibers" / "fibers_000001.vtu"));
   for (const auto& entry : fs::directory_iterator(m_dir))
     EXPECT_EQ(entry.path().filename().string().rfind("bodies", 0), std::string::npos) << entry.path();
 }
@@ -485,10 +486,10 @@ TEST_F(OutputWriterTest, ContactsPvdListsOnlyWrittenFiles) {
   std::vector<ContactPoint> contacts(1);
   contacts[0].normal_force = 2.5;
   out.write_increment(deformed_state(model), row(1, 1.0, {}), 1.0, true, &contacts);
-  EXPECT_FALSE(fs::exists(m_dir / "contacts_000000.vtu"));
+  EXPECT_FALSE(fs::exists(m_dir / "contacts" / "contacts_000000.vtu"));
   const auto entries = read_pvd(m_dir / "contacts.pvd");
   ASSERT_EQ(entries.size(), 1u);
-  EXPECT_EQ(entries[0].second, "contacts_000001.vtu");
+  EXPECT_EQ(entries[0].second, "contacts/contacts_000001.vtu");
   const Vtu vtu = read_vtu(m_dir / entries[0].second);
   EXPECT_EQ(vtu.points, 1u);
   EXPECT_EQ(vtu.get<double>("normal_force").at(0), 2.5);
@@ -521,27 +522,59 @@ TEST_F(OutputWriterTest, StaleOutputOfAPreviousRunIsRemoved) {
     for (int i = 0; i < 3; ++i) out.write_increment(model.reference, row(i, 0.1 * i, {}), i, true);
     out.write_summary(nlohmann::json{{"status", "converged"}});
   }
-  ASSERT_TRUE(fs::exists(m_dir / "fibers_000002.vtu"));
+  ASSERT_TRUE(fs::exists(m_dir / "fibers" / "fibers_000002.vtu"));
   OutputWriter out(m_dir.string(), model, {}, 6);
-  EXPECT_FALSE(fs::exists(m_dir / "fibers_000002.vtu"));
-  EXPECT_FALSE(fs::exists(m_dir / "lines_000000.vtu"));
+  EXPECT_FALSE(fs::exists(m_dir / "fibers" / "fibers_000002.vtu"));
+  EXPECT_FALSE(fs::exists(m_dir / "lines" / "lines_000000.vtu"));
   EXPECT_FALSE(fs::exists(m_dir / "fibers.pvd"));
   EXPECT_FALSE(fs::exists(m_dir / "summary.json"));
   EXPECT_EQ(read_lines(m_dir / "history.csv").size(), 1u);
 }
 
-TEST_F(OutputWriterTest, UnwritableDirectoryThrowsRunError) {
+TEST_F(OutputWriterTest, UnwritableDirectoryIsAnInputErrorNamingThePath) {
   const Model model = make_model();
   fs::create_directories(m_dir);
   std::ofstream(m_dir / "plain_file") << "x";
   try {
     OutputWriter out((m_dir / "plain_file" / "sub").string(), model, {}, 12);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("plain_file"), std::string::npos) << e.what();
+    EXPECT_EQ(e.key(), "(output directory)");
+  }
+  EXPECT_THROW(OutputWriter((m_dir / "plain_file").string(), model, {}, 12), InputError);
+  // A file in place of a series' subfolder.
+  fs::create_directories(m_dir / "taken");
+  std::ofstream(m_dir / "taken" / "lines") << "x";
+  try {
+    OutputWriter out((m_dir / "taken").string(), model, {}, 12);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), (m_dir / "taken" / "lines").string());
+  }
+  EXPECT_THROW(OutputWriter((m_dir / "ok").string(), model, {}, 2), RunError);  // too few tube sides
+}
+
+// A full disk (/dev/full takes no byte: ENOSPC) is reported at the write, naming the file.
+TEST_F(OutputWriterTest, FullDiskIsReportedAtTheWrite) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  const Model model = make_model();
+  OutputWriter out(m_dir.string(), model, {}, 6);
+  out.write_increment(model.reference, row(0, 0.0, {}), 0.0, true);
+  fs::create_symlink("/dev/full", m_dir / "nodes.csv.tmp");
+  try {
+    out.write_nodes(model.reference);
     FAIL() << "expected RunError";
   } catch (const RunError& e) {
-    EXPECT_NE(std::string(e.what()).find("plain_file"), std::string::npos) << e.what();
+    const std::string what = e.what();
+    EXPECT_NE(what.find("nodes.csv.tmp"), std::string::npos) << what;
+    EXPECT_NE(what.find(std::strerror(ENOSPC)), std::string::npos) << what;
   }
-  EXPECT_THROW(OutputWriter((m_dir / "plain_file").string(), model, {}, 12), RunError);
-  EXPECT_THROW(OutputWriter((m_dir / "ok").string(), model, {}, 2), RunError);  // too few tube sides
+  EXPECT_FALSE(fs::exists(m_dir / "nodes.csv"));
+  // A series' subfolder replaced by a file during the run: the next .vtu fails.
+  fs::remove_all(m_dir / "fibers");
+  std::ofstream(m_dir / "fibers") << "x";
+  EXPECT_THROW(out.write_increment(model.reference, row(1, 1.0, {}), 1.0, true), RunError);
 }
 
 }  // namespace

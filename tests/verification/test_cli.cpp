@@ -217,12 +217,12 @@ TEST_F(Cli, RunOfTheBundleExampleWritesTheBodyOutputs) {
   // bodies.pvd and its .vtu files.
   EXPECT_TRUE(fs::is_regular_file(out / "bodies.pvd"));
   int vtus = 0;
-  for (const fs::directory_entry& f : fs::directory_iterator(out)) {
+  for (const fs::directory_entry& f : fs::directory_iterator(out / "bodies")) {
     const std::string name = f.path().filename().string();
     if (name.rfind("bodies_", 0) == 0 && f.path().extension() == ".vtu") ++vtus;
   }
   EXPECT_GE(vtus, 1);
-  EXPECT_NE(slurp(out / "bodies.pvd").find("bodies_"), std::string::npos);
+  EXPECT_NE(slurp(out / "bodies.pvd").find("file=\"bodies/bodies_"), std::string::npos);
 
   // summary.json counts the body and the binding.
   const nlohmann::json s = nlohmann::json::parse(slurp(out / "summary.json"));
@@ -369,11 +369,11 @@ TEST_F(Cli, GenerateWritesThePlainCaseItsViewsAndSlices) {
   EXPECT_NE(r.out.find("4 tows"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("fabric_generated"), std::string::npos) << r.out;
   const fs::path dir = m_dir / "fabric_generated";
-  for (const char* name : {"fabric.toml", "fibers.pvd", "lines.pvd", "bodies.pvd", "fibers_000000.vtu",
-                           "lines_000000.vtu", "bodies_000000.vtu", "slices/slice_x.svg", "slices/slice_y.svg"})
+  for (const char* name : {"fabric.toml", "fibers.pvd", "lines.pvd", "bodies.pvd", "fibers/fibers_000000.vtu",
+                           "lines/lines_000000.vtu", "bodies/bodies_000000.vtu", "slices/slice_x.svg", "slices/slice_y.svg"})
     EXPECT_TRUE(fs::is_regular_file(dir / name)) << name << "\n" << r.out;
   EXPECT_FALSE(fs::exists(dir / "history.csv"));  // nothing was run
-  EXPECT_FALSE(fs::exists(dir / "fibers_000001.vtu"));
+  EXPECT_FALSE(fs::exists(dir / "fibers" / "fibers_000001.vtu"));
   for (const char* name : {"slices/slice_x.png", "slices/slice_y.png"}) EXPECT_TRUE(is_png(dir / name)) << name;
   // The middle slices: x = 0 (between the wefts) cuts the 6 warp fibers, y = 0 the 6 weft fibers.
   EXPECT_NE(r.out.find("slices/slice_x.png (x = 0 mm)"), std::string::npos) << r.out;
@@ -384,7 +384,7 @@ TEST_F(Cli, GenerateWritesThePlainCaseItsViewsAndSlices) {
   EXPECT_EQ(svg_x.find("data-fiber=\"weft"), std::string::npos);
   EXPECT_NE(svg_y.find("data-fiber=\"weft0.f0\""), std::string::npos);
   // The bodies' view holds each body and its members: 4 + 8 bodies, each with members.
-  EXPECT_NE(slurp(dir / "bodies_000000.vtu").find("NumberOfPoints"), std::string::npos);
+  EXPECT_NE(slurp(dir / "bodies" / "bodies_000000.vtu").find("NumberOfPoints"), std::string::npos);
 
   // The written case is a plain case that check accepts and that reads back to the same
   // fibers, bodies, bindings, tows and weave.

@@ -906,11 +906,11 @@ TEST(ContactOutput, SlipFlagMarksFrictionOnTheCone) {
   const RunReport report = run_case(c, options);
   ASSERT_EQ(report.result.status, RunResult::Status::Converged) << report.result.message;
   fs::path last;
-  for (const fs::directory_entry& e : fs::directory_iterator(dir))
+  for (const fs::directory_entry& e : fs::directory_iterator(dir / "contacts"))
     if (e.path().filename().string().rfind("contacts_", 0) == 0 && e.path().extension() == ".vtu" &&
         (last.empty() || e.path().filename() > last.filename()))
       last = e.path();
-  ASSERT_FALSE(last.empty()) << "no contacts_*.vtu in " << dir;
+  ASSERT_FALSE(last.empty()) << "no contacts/contacts_*.vtu in " << dir;
   const auto arrays = read_vtu_arrays(last);
   ASSERT_TRUE(arrays.count("slip") && arrays.count("friction") && arrays.count("normal_force")) << last;
   const std::vector<std::int32_t> slip = as_vector<std::int32_t>(arrays.at("slip"));

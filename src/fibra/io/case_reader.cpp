@@ -158,6 +158,7 @@ class JsonBuilder {
     return add(std::move(v));
   }
   bool start_object(std::size_t /*elements*/) {
+    if (too_deep()) return false;
     Value v;
     v.type = Value::Type::Table;
     m_stack.push_back(Frame{std::move(v), next_path()});
@@ -165,6 +166,7 @@ class JsonBuilder {
   }
   bool end_object() { return end_container(); }
   bool start_array(std::size_t /*elements*/) {
+    if (too_deep()) return false;
     Value v;
     v.type = Value::Type::Array;
     m_stack.push_back(Frame{std::move(v), next_path()});
@@ -181,8 +183,15 @@ class JsonBuilder {
     frame.value.keys.push_back(k);
     return true;
   }
-  bool parse_error(std::size_t /*position*/, const std::string& /*last_token*/,
-                   const nlohmann::json::exception& ex) {
+  bool parse_error(std::size_t position, const std::string& last_token, const nlohmann::json::exception& ex) {
+    m_error_position = position;
+    // A number beyond the range of a double (1e999): the value's key, as for inf and nan.
+    if (dynamic_cast<const nlohmann::json::out_of_range*>(&ex) != nullptr && !m_stack.empty()) {
+      m_error_key = next_path();
+      m_error = fmt::format("expected a finite number, got {}, beyond the largest double (about 1.8e308)",
+                            last_token);
+      return false;
+    }
     std::string message = ex.what();
     // Drop the "[json.exception.parse_error.101] " prefix.
     if (auto end = message.find("] "); !message.empty() && message[0] == '[' &&
@@ -197,8 +206,20 @@ class JsonBuilder {
   Value& root() { return m_root; }                        ///< the document
   const std::string& error() const { return m_error; }    ///< why parsing stopped
   const std::string& error_key() const { return m_error_key; }
+  /// The byte offset where parsing stopped, when it stopped on the text (0 otherwise).
+  std::size_t error_position() const { return m_error_position; }
+  /// Containers nest at most this deep (as in TOML files).
+  static constexpr std::size_t kMaxDepth = 256;
 
  private:
+  bool too_deep() {
+    if (m_stack.size() < kMaxDepth) return false;
+    // The key of the outermost container (a whole path would be kMaxDepth indices long).
+    m_error_key = m_stack.size() > 1 && !m_stack[1].path.empty() ? m_stack[1].path : "(file)";
+    m_error = fmt::format("arrays and objects nested deeper than {} levels", kMaxDepth);
+    return true;
+  }
+
   struct Frame {
     Value value;
     std::string path;
@@ -231,6 +252,7 @@ class JsonBuilder {
   Value m_root;
   std::string m_error;
   std::string m_error_key;
+  std::size_t m_error_position = 0;
 };
 
 // ------------------------------------------------------------------------------------------
@@ -778,6 +800,13 @@ PathSpec Reader::read_path(const Value& t, const std::string& path) const {
     double extent = 0;
     for (const Vec3& x : p.points) extent = std::max(extent, (x - p.points.front()).norm());
     for (std::size_t i = 1; i < p.points.size(); ++i) {
+      if (!std::isfinite((p.points[i] - p.points[i - 1]).squaredNorm())) {
+        fail(item(key, i),
+             fmt::format("points {} and {} are too far apart: the square of their distance overflows (give the "
+                         "geometry in smaller units or nearer the origin)",
+                         i - 1, i),
+             &points->items[i]);
+      }
       if ((p.points[i] - p.points[i - 1]).norm() <= 1e-12 * extent) {
         fail(item(key, i),
              fmt::format("points {} and {} coincide (consecutive points must be distinct)", i - 1, i),
@@ -2123,7 +2152,12 @@ Case parse_case_json(const std::string& text, const std::string& file_label, con
   JsonBuilder builder;
   if (!nlohmann::json::sax_parse(text, &builder)) {
     const std::string key = builder.error_key().empty() ? "(file)" : builder.error_key();
-    const std::string message = builder.error().empty() ? "JSON syntax error" : builder.error();
+    std::string message = builder.error().empty() ? "JSON syntax error" : builder.error();
+    if (key != "(file)" && builder.error_position() > 0) {
+      // The line of a value refused while parsing (the syntax errors give their own).
+      const std::size_t end = std::min(builder.error_position(), text.size());
+      message += fmt::format(" (line {})", 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(end), '\n'));
+    }
     throw InputError(file_label, key, message);
   }
   if (builder.root().type != Value::Type::Table) {

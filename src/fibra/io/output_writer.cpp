@@ -64,6 +64,37 @@ class CheckedFile {
   std::FILE* m_file = nullptr;
 };
 
+/// Numbered files of a ParaView series (and their temporaries), in its subfolder or, as an
+/// older run left them, in the output directory itself.
+const std::regex& numbered_file() {
+  static const std::regex re(R"((fibers|lines|contacts|bodies)_\d{6}\.vtu(\.tmp)?)");
+  return re;
+}
+
+/// Whether `dir` takes a new file: one is created, written and removed.
+void check_writable(const fs::path& dir) {
+  const fs::path probe = dir / ".fibra_write_check";
+  errno = 0;
+  std::FILE* f = std::fopen(probe.c_str(), "wb");
+  int err = errno;
+  bool ok = f != nullptr;
+  if (f) {
+    errno = 0;
+    ok = std::fputc('\n', f) != EOF && std::fflush(f) == 0;
+    err = errno;
+    if (std::fclose(f) != 0 && ok) {
+      ok = false;
+      err = errno;
+    }
+  }
+  std::error_code ec;
+  fs::remove(probe, ec);
+  if (!ok)
+    throw InputError(dir.string(), "(output directory)",
+                     fmt::format("cannot write into it: {} (give another --out directory)",
+                                 err != 0 ? std::strerror(err) : "unknown error"));
+}
+
 /// Writes `path` atomically: `fill` writes into PATH.tmp, which then replaces PATH.
 template <class Fill>
 void write_atomic(const std::string& path, Fill&& fill) {
@@ -263,29 +294,62 @@ void OutputWriter::FileCloser::operator()(std::FILE* f) const {
   if (f) std::fclose(f);
 }
 
+void prepare_output_dir(const std::string& dir_in, const std::vector<std::string>& subdirs) {
+  const fs::path dir = dir_in.empty() ? fs::path(".") : fs::path(dir_in);
+  std::vector<fs::path> dirs = {dir};
+  for (const std::string& sub : subdirs) dirs.push_back(dir / sub);
+  for (const fs::path& d : dirs) {
+    std::error_code ec;
+    if (fs::exists(d, ec) && !fs::is_directory(d, ec))
+      throw InputError(d.string(), "(output directory)",
+                       d == dir ? "exists and is not a directory: expected a directory to write the results into "
+                                  "(give another --out directory)"
+                                : "exists and is not a directory: the run writes into this subfolder of the "
+                                  "output directory (remove the file or give another --out directory)");
+    // A missing subfolder is made when the run first writes into it (the directory takes it).
+    if (d != dir && !fs::exists(d, ec)) continue;
+    fs::create_directories(d, ec);
+    if (ec || !fs::is_directory(d, ec))
+      throw InputError(d.string(), "(output directory)",
+                       fmt::format("cannot create the directory: {} (give another --out directory)",
+                                   ec ? ec.message() : "not a directory"));
+    check_writable(d);
+  }
+}
+
+namespace {
+/// The ParaView series, each in a subfolder of its name.
+const std::vector<std::string>& series_names() {
+  static const std::vector<std::string> names = {"fibers", "lines", "contacts", "bodies"};
+  return names;
+}
+}  // namespace
+
 OutputWriter::OutputWriter(std::string dir, const Model& model, std::vector<std::string> extra_columns, int tube_sides)
     : m_dir(std::move(dir)), m_model(model), m_extra_columns(std::move(extra_columns)), m_tube_sides(tube_sides) {
   if (m_tube_sides < 3) throw RunError(fmt::format("output: tube_sides must be at least 3, got {}", m_tube_sides));
   if (m_dir.empty()) m_dir = ".";
-  std::error_code ec;
-  fs::create_directories(m_dir, ec);
-  if (ec) throw RunError(fmt::format("cannot create output directory '{}': {}", m_dir, ec.message()));
-  if (!fs::is_directory(m_dir, ec))
-    throw RunError(fmt::format("output path '{}' exists and is not a directory", m_dir));
+  prepare_output_dir(m_dir, {"fibers", "lines"});
 
   // Remove what a previous run in this directory left, so that no stale collection,
   // summary or numbered .vtu can be mistaken for output of this run.
-  static const std::regex numbered(R"((fibers|lines|contacts|bodies)_\d{6}\.vtu(\.tmp)?|curves_.*\.csv)");
+  std::error_code ec;
   fs::remove_all(path("state"), ec);  // the states at step ends, for runs that go on from them
   for (const char* name :
        {"fibers.pvd", "lines.pvd", "contacts.pvd", "bodies.pvd", "nodes.csv", "summary.json"})
     fs::remove(path(name), ec);
-  for (fs::directory_iterator it(m_dir, ec), end; !ec && it != end; it.increment(ec)) {
-    const std::string name = it->path().filename().string();
-    if (std::regex_match(name, numbered)) {
-      std::error_code rm;
-      fs::remove(it->path(), rm);
+  static const std::regex curves(R"(curves_.*\.csv)");
+  std::vector<fs::path> folders = {fs::path(m_dir)};
+  for (const std::string& series : series_names()) folders.push_back(fs::path(m_dir) / series);
+  for (const fs::path& folder : folders) {
+    for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+      const std::string name = it->path().filename().string();
+      if (std::regex_match(name, numbered_file()) || (folder == fs::path(m_dir) && std::regex_match(name, curves))) {
+        std::error_code rm;
+        fs::remove(it->path(), rm);
+      }
     }
+    ec.clear();
   }
 
   const std::string history = path("history.csv");
@@ -304,6 +368,20 @@ OutputWriter::OutputWriter(std::string dir, const Model& model, std::vector<std:
 OutputWriter::~OutputWriter() = default;
 
 std::string OutputWriter::path(const std::string& name) const { return (fs::path(m_dir) / name).string(); }
+
+std::string OutputWriter::series_file(const std::string& series, int index) {
+  return fmt::format("{}/{}_{:06d}.vtu", series, series, index);
+}
+
+std::string OutputWriter::series_path(const std::string& series, int index) const {
+  const fs::path folder = fs::path(m_dir) / series;
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) {
+    fs::create_directories(folder, ec);
+    if (ec) io_fail("cannot create the directory", folder.string(), ec.value());
+  }
+  return path(series_file(series, index));
+}
 
 void OutputWriter::check_state(const VecX& q) const {
   if (q.size() != m_model.num_dofs())
@@ -359,7 +437,7 @@ void OutputWriter::write_contacts(const std::vector<ContactPoint>& contacts, int
   std::vector<VtuArray> pts = {vtu_array("Points", "Float64", 3, points)};
   std::vector<VtuArray> cells = {vtu_array("connectivity", "Int64", 1, connectivity),
                                  vtu_array("offsets", "Int64", 1, offsets), vtu_array("types", "UInt8", 1, types)};
-  write_vtu_arrays(path(fmt::format("contacts_{:06d}.vtu", index)), time, n, n, point_data, pts, cells, "normal_force",
+  write_vtu_arrays(series_path("contacts", index), time, n, n, point_data, pts, cells, "normal_force",
                    "normal");
 }
 
@@ -430,7 +508,7 @@ void OutputWriter::write_bodies(const std::vector<BodyPoint>& bodies, int index,
   std::vector<VtuArray> cells = {vtu_array("connectivity", "Int64", 1, connectivity),
                                  vtu_array("offsets", "Int64", 1, offsets), vtu_array("types", "UInt8", 1, types)};
   std::vector<VtuArray> cell_data = {vtu_array("kind", "Int32", 1, kind)};
-  write_vtu_arrays(path(fmt::format("bodies_{:06d}.vtu", index)), time, n_points, n_cells, point_data, pts, cells,
+  write_vtu_arrays(series_path("bodies", index), time, n_points, n_cells, point_data, pts, cells,
                    "body", "force", cell_data, "kind");
 }
 
@@ -539,8 +617,8 @@ void OutputWriter::write_vtu(const VecX& q, int index, double time) const {
     }
   }
 
-  write_vtu_file(path(fmt::format("fibers_{:06d}.vtu", index)), tubes, time);
-  write_vtu_file(path(fmt::format("lines_{:06d}.vtu", index)), lines, time);
+  write_vtu_file(series_path("fibers", index), tubes, time);
+  write_vtu_file(series_path("lines", index), lines, time);
 }
 
 void OutputWriter::write_pvd(const std::string& name, const std::string& prefix, const PvdEntries& entries) const {
@@ -549,8 +627,8 @@ void OutputWriter::write_pvd(const std::string& name, const std::string& prefix,
                      std::endian::native == std::endian::little ? "LittleEndian" : "BigEndian");
   xml += "  <Collection>\n";
   for (const auto& [time, index] : entries)
-    xml += fmt::format("    <DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{}_{:06d}.vtu\"/>\n", time, prefix,
-                       index);
+    xml += fmt::format("    <DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{}\"/>\n", time,
+                       xml_attr(series_file(prefix, index)));
   xml += "  </Collection>\n</VTKFile>\n";
   write_atomic(path(name), [&](CheckedFile& f) { f.write(xml); });
 }

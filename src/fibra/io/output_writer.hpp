@@ -1,9 +1,10 @@
 #pragma once
 /// Run output: history.csv (one row per converged increment), nodes.csv, ParaView
 /// collections of tube surfaces and centroid lines (fibers.pvd / lines.pvd with one .vtu per
-/// written increment), of contact elements (contacts.pvd) and of rigid bodies (bodies.pvd),
-/// and summary.json. Every write is checked; files that are rewritten
-/// (pvd, nodes.csv, summary.json) are replaced atomically. File formats: docs/outputs.md.
+/// written increment in the subfolders fibers/ and lines/), of contact elements (contacts.pvd,
+/// contacts/) and of rigid bodies (bodies.pvd, bodies/), and summary.json. Every write is
+/// checked; files that are rewritten (pvd, nodes.csv, summary.json) are replaced atomically.
+/// File formats: docs/outputs.md.
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -52,18 +53,25 @@ struct BodyPoint {
   std::vector<Vec3> members;       ///< current positions of its bound members (nodes or body centres)
 };
 
+/// Creates the output directory `dir` and checks that it and those of its subfolders `subdirs`
+/// (relative to it) that exist take a new file; a missing subfolder is left to be made when it
+/// is first written into. Throws InputError naming the path when one is a file, cannot be
+/// created or cannot be written into, so that a run stops before it starts.
+void prepare_output_dir(const std::string& dir, const std::vector<std::string>& subdirs);
+
 /// Writes all output files of a run into one directory.
 class OutputWriter {
  public:
-  /// Creates `dir` (and parents), opens history.csv with header: step,step_index,increment,load_factor,iterations,residual,wall_time, then the `extra_columns` names (e.g. reaction:beam:first:x).
+  /// Creates `dir` (and parents) and checks it and its subfolders fibers/ and lines/
+  /// (prepare_output_dir: InputError when one cannot be written), opens history.csv with header: step,step_index,increment,load_factor,iterations,residual,wall_time, then the `extra_columns` names (e.g. reaction:beam:first:x).
   OutputWriter(std::string dir, const Model& model, std::vector<std::string> extra_columns, int tube_sides);
   /// Closes history.csv.
   ~OutputWriter();
   OutputWriter(const OutputWriter&) = delete;             ///< not copyable (owns a file)
   OutputWriter& operator=(const OutputWriter&) = delete;  ///< not copyable (owns a file)
 
-  /// Appends a history row (flushed to disk at once) and, if write_vtu, writes fibers_NNNNNN.vtu and lines_NNNNNN.vtu and rewrites fibers.pvd / lines.pvd (timestep = load counter `time`) so the collections are valid after every increment.
-  /// With write_vtu it also writes contacts_NNNNNN.vtu and rewrites contacts.pvd when `contacts` is non-null (even if empty), and writes bodies_NNNNNN.vtu and rewrites bodies.pvd when `bodies` is non-null and non-empty (same NNNNNN as fibers_NNNNNN.vtu). Each collection lists only the files actually written.
+  /// Appends a history row (flushed to disk at once) and, if write_vtu, writes fibers/fibers_NNNNNN.vtu and lines/lines_NNNNNN.vtu and rewrites fibers.pvd / lines.pvd (timestep = load counter `time`) so the collections are valid after every increment.
+  /// With write_vtu it also writes contacts/contacts_NNNNNN.vtu and rewrites contacts.pvd when `contacts` is non-null (even if empty), and writes bodies/bodies_NNNNNN.vtu and rewrites bodies.pvd when `bodies` is non-null and non-empty (same NNNNNN as the fibers'). Each collection lists only the files actually written, by their paths relative to the output directory.
   void write_increment(const VecX& q, const HistoryRow& row, double time, bool write_vtu,
                        const std::vector<ContactPoint>* contacts = nullptr,
                        const std::vector<BodyPoint>* bodies = nullptr);
@@ -81,6 +89,10 @@ class OutputWriter {
     void operator()(std::FILE* f) const;
   };
   std::string path(const std::string& name) const;
+  /// SERIES/SERIES_NNNNNN.vtu: a series' file relative to the output directory.
+  static std::string series_file(const std::string& series, int index);
+  /// The path of a series' file, its subfolder created when missing.
+  std::string series_path(const std::string& series, int index) const;
   void write_history_row(const HistoryRow& row);
   void write_vtu(const VecX& q, int index, double time) const;
   using PvdEntries = std::vector<std::pair<double, int>>;  ///< (time, file index) of each .vtu of a collection

@@ -1,13 +1,83 @@
 #include "fibra/model/model.hpp"
 
+#include <algorithm>
+#include <cfloat>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <fmt/format.h>
 
 #include "fibra/core/error.hpp"
+#include "fibra/model/fabric.hpp"
 #include "fibra/model/fiber_path.hpp"
 
 namespace fibra {
+
+namespace {
+
+/// Refuses a fiber whose built geometry or section the beam's arithmetic cannot hold: a path
+/// of no length or of an infinite one, coordinates whose squares overflow, elements shorter
+/// than the rounding of their coordinates resolves (1e-9 of them), an arc or helix element
+/// sweeping more than a half turn (a quadratic element cannot follow it), a section whose
+/// stiffness is zero, subnormal or infinite. `key` names the fiber in the case file
+/// (fiber[i], or the [fabric] direction that generates it).
+void check_fiber_geometry(const Model& model, const Fiber& fib, const FiberSpec& spec, const std::string& file,
+                          const std::string& key, bool generated) {
+  const std::string path_key =
+      generated ? key
+                : key + (spec.path.kind == PathSpec::Kind::Polyline ? ".points"
+                         : spec.path.kind == PathSpec::Kind::Arc    ? ".arc"
+                                                                     : ".helix");
+  const std::string who = generated ? fmt::format("fiber \"{}\": ", fib.name) : std::string();
+  const double length = fib.length;
+  if (!(std::isfinite(length) && length > 0))
+    throw InputError(file, path_key,
+                     fmt::format("{}the path is {:.6g} m long: expected a finite length > 0", who, length));
+  double extent = 0;  // the largest coordinate of the fiber's nodes
+  for (Index j = 0; j < fib.num_nodes; ++j)
+    extent = std::max(extent, model.reference.segment<3>(kNodeDofs * (fib.first_node + j)).cwiseAbs().maxCoeff());
+  if (!std::isfinite(extent * extent))
+    throw InputError(file, path_key,
+                     fmt::format("{}coordinates up to {:.6g} m: their squares overflow (the beam computes squared "
+                                 "lengths); give the geometry in smaller units or nearer the origin",
+                                 who, extent));
+  const double h = length / static_cast<double>(fib.num_elements);
+  if (!(h * h >= DBL_MIN))
+    throw InputError(file, path_key,
+                     fmt::format("{}{} elements of {:.6g} m on a {:.6g} m fiber: the squares of their lengths "
+                                 "underflow (below 1e-308); give the geometry in larger units",
+                                 who, fib.num_elements, h, length));
+  if (h < 1e-9 * extent)
+    throw InputError(file, path_key,
+                     fmt::format("{}{} elements of {:.6g} m on a {:.6g} m fiber with coordinates up to {:.6g} m: an "
+                                 "element shorter than 1e-9 of the coordinates is lost in their rounding (positions "
+                                 "hold 16 digits); give fewer elements, a longer fiber or coordinates nearer the "
+                                 "origin",
+                                 who, fib.num_elements, h, length, extent));
+  if (spec.path.kind != PathSpec::Kind::Polyline) {
+    const double half_turns = spec.path.kind == PathSpec::Kind::Arc ? std::abs(spec.path.angle) / std::numbers::pi
+                                                                    : 2.0 * spec.path.turns;
+    const double per_element = 180.0 * half_turns / static_cast<double>(fib.num_elements);
+    if (!(per_element <= 180.0))
+      throw InputError(
+          file, generated ? key : key + ".elements",
+          fmt::format("{}{} elements on a sweep of {:.6g} degrees: each element would span {:.6g} degrees, more than "
+                      "the half turn a quadratic element can follow; give at least {:.6g} elements",
+                      who, fib.num_elements, 180.0 * half_turns, per_element, std::ceil(half_turns)));
+  }
+  const Section& sec = model.sections[fib.section];
+  const double largest = sec.stiffness.cwiseAbs().maxCoeff();
+  const bool stiffness_finite = sec.stiffness.allFinite() && sec.stiffness_inplane.allFinite();
+  for (const double v : {sec.area, sec.inertia_1, sec.inertia_2, largest})
+    if (!(std::isfinite(v) && v >= DBL_MIN && stiffness_finite))
+      throw InputError(file, generated ? key : key + (spec.semi_axis_1 != spec.semi_axis_2 ? ".semi_axes" : ".radius"),
+                       fmt::format("{}a section of semi-axes {:.6g} x {:.6g} m of this material has an area of "
+                                   "{:.6g} m^2, bending inertias {:.6g} and {:.6g} m^4 and a largest stiffness entry "
+                                   "of {:.6g}: expected finite values > 0 (not zero, not below 1e-308)",
+                                   who, sec.a, sec.b, sec.area, sec.inertia_1, sec.inertia_2, largest));
+}
+
+}  // namespace
 
 int Model::fiber_index(const std::string& name) const {
   for (size_t i = 0; i < fibers.size(); ++i)
@@ -142,7 +212,13 @@ Model build_model(const Case& c) {
     if (mat < 0)
       throw InputError(c.file, fmt::format("fiber[{}].material", i),
                        fmt::format("no material named \"{}\"", spec.material));
-    add_fiber(model, spec, mat);
+    const int f = add_fiber(model, spec, mat);
+    // A [fabric]'s fibers come after the file's, named warp<i>.f<k> and weft<j>.f<k>.
+    const bool generated =
+        c.fabric && static_cast<double>(c.fibers.size() - i) <= fabric_size(*c.fabric).fibers;
+    const std::string key = generated ? (spec.name.starts_with("warp") ? "fabric.warp" : "fabric.weft")
+                                      : fmt::format("fiber[{}]", i);
+    check_fiber_geometry(model, model.fibers[f], spec, c.file, key, generated);
   }
   Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
   for (Index k = 0; k < model.num_nodes(); ++k) {

@@ -27,23 +27,41 @@
 
 namespace fibra {
 
+namespace {
+
+/// The subfolders a run of `c` writes into (prepare_output_dir checks those already there):
+/// the ParaView series, the states, and the slices and plots of a woven sample's steps.
+std::vector<std::string> output_subdirs(const Case& c) {
+  std::vector<std::string> dirs = {"fibers", "lines", "state"};
+  if (c.contact.enabled) dirs.push_back("contacts");
+  if (!c.bodies.empty()) dirs.push_back("bodies");
+  if (!c.tows.empty()) dirs.push_back("slices");
+  if (c.output.plots && std::any_of(c.steps.begin(), c.steps.end(), [](const StepSpec& st) { return st.is_test(); }))
+    dirs.push_back("plots");
+  return dirs;
+}
+
+}  // namespace
+
 RunReport run_case(const Case& c, const RunOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   if (options.threads > 0) omp_set_num_threads(options.threads);
-  const Model model = build_model(c);
-  StaticSolver solver(c, model);
-  if (options.progress) solver.set_progress(options.progress);
-  // [start]: the run goes on from the state an earlier run saved at the end of its last step.
+  // [start]: its output directory replaces the states of the run it goes on from: refuse.
   if (!c.start.empty()) {
-    // Its output directory replaces the states of the run it goes on from: refuse.
     std::error_code ec;
     if (std::filesystem::equivalent(options.out_dir, c.start, ec))
       throw InputError(c.file, "start.from",
                        fmt::format("\"{}\" is also this run's output directory (its states would be replaced): "
                                    "give the run another --out directory",
                                    c.start));
-    solver.restore_state(read_state_file(c.start_state), c.start_state);
   }
+  // An output directory that cannot be written stops the run before anything is computed.
+  prepare_output_dir(options.out_dir, output_subdirs(c));
+  const Model model = build_model(c);
+  StaticSolver solver(c, model);
+  if (options.progress) solver.set_progress(options.progress);
+  // [start]: the run goes on from the state an earlier run saved at the end of its last step.
+  if (!c.start.empty()) solver.restore_state(read_state_file(c.start_state), c.start_state);
   const VecX initial = solver.state();
   std::vector<std::string> columns = solver.reaction_columns();
   const std::vector<std::string> contact_columns = {
@@ -103,7 +121,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     curves.flush();
   };
   nlohmann::json states = nlohmann::json::array();  // the state files written at step ends
-  auto observer = [&](const IncrementInfo& info, const VecX& q) {
+  auto observe = [&](const IncrementInfo& info, const VecX& q) {
     const StepSpec& st = c.steps[info.step_index];
     if (edges && st.is_test() && info.step_index != curves_step) {
       // A new loading step: its curves start from the state at its start.
@@ -225,6 +243,20 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     // The plots of a test step once its curves are complete (after its history is written).
     if (info.step_end && info.step_index == curves_step) plotter.plot(curves_step);
   };
+  // A failed write (a full disk, a file in place of a subfolder) stops the run at the
+  // increment it happened, named in the error; every file written before it is kept.
+  std::string output_failure;
+  auto observer = [&](const IncrementInfo& info, const VecX& q) {
+    try {
+      observe(info, q);
+    } catch (const std::exception& e) {
+      output_failure = fmt::format("step \"{}\" ({} of {}), increment {} (load factor {:.6g}): writing the outputs "
+                                   "failed: {}",
+                                   info.step, info.step_index + 1, c.steps.size(), info.increment, info.load_factor,
+                                   e.what());
+      throw RunError(output_failure + "; the run stops there, the outputs of the increments before it are kept");
+    }
+  };
   // Initial (reference) state as increment 0 in the ParaView collection.
   std::vector<BodyPoint> initial_bodies;
   if (bodies)
@@ -253,7 +285,24 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   writer.write_increment(initial, HistoryRow{"initial", -1, 0, 0.0, 0, 0.0, 0.0, initial_extra}, 0.0, true,
                          nullptr, bodies ? &initial_bodies : nullptr);
   RunReport report;
-  report.result = solver.run(observer);
+  try {
+    report.result = solver.run(observer);
+  } catch (const RunError&) {
+    if (output_failure.empty()) throw;
+    // What it can of the summary: the run's status and where it stopped (the directory may
+    // take no more files).
+    nlohmann::json j;
+    j["case"] = c.file;
+    j["title"] = c.title;
+    j["status"] = "output_failed";
+    j["converged"] = false;
+    j["message"] = output_failure;
+    try {
+      writer.write_summary(j);
+    } catch (const RunError&) {
+    }
+    throw;
+  }
   report.stats = solver.stats();
   report.final_state = solver.state();
   report.fibers = static_cast<Index>(model.fibers.size());
