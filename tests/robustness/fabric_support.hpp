@@ -172,7 +172,7 @@ inline void check_crimp_balanced(Checks& checks, const CaseRun& s, const Snapsho
 /// A biaxial curve: the force of each direction that is pulled grows at every level, with a
 /// stiffness that does not fall (J-shaped: the crimp interchange first, then the fibers
 /// stretching); every point an equilibrium. A curve point is settled when the drag force is
-/// below solver.test_tolerance = 1e-4 of the reference force (docs/case-file.md), so its edge
+/// below the test step's tolerance, 1e-4 of the reference force (docs/case-file.md), so its edge
 /// forces balance to about that: the equilibrium check asks 1e-4 of the load scale, and the
 /// stiffness of a level may fall short of the last one by no more than the two points' measured
 /// imbalances allow (their errors over the strain steps).

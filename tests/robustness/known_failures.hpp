@@ -47,16 +47,16 @@ inline constexpr KnownFailure kKnownFailures[] = {
      "fiber, 1650 N here, 1e8 times the thin fiber's load"},
     {"fabric_twill21_biaxial",
      "the relax ends with its edge forces balanced to 1.4e-5 of the largest only (relax steps end once the drag "
-     "force is below solver.relax_tolerance, 1e-4 of the reference force); then the weft's stiffness falls at "
+     "force is below the relax step's tolerance, 1e-4 of the reference force); then the weft's stiffness falls at "
      "level 3 (5658 N against 5683 N at level 2, -0.4 %) while the curve still rises"},
     {"fabric_twill22_biaxial",
-     "the relax ends with its edge forces balanced to 8.8e-6 of the largest only (relax_tolerance 1e-4 of the "
+     "the relax ends with its edge forces balanced to 8.8e-6 of the largest only (the relax step's tolerance, 1e-4 of the "
      "reference force); the warp's stiffness falls at the last level (7287 N against 7385 N, -1.3 %)"},
     {"fabric_twill31_biaxial", "the relax does not end within its 60 s budget (about 180 increments, 55 cuts): its drag force wanders "
-     "between 8e-4 and 4e-3 of the reference force (relax_tolerance 1e-4) with the drag between 3.6 and 15 N/m, "
+     "between 8e-4 and 4e-3 of the reference force (the relax step's tolerance, 1e-4) with the drag between 3.6 and 15 N/m, "
      "falling and rising again, as issue 40's 2 x 2 basket weave did"},
     {"fabric_satin5_biaxial",
-     "the relax ends with its edge forces balanced to 1.9e-5 of the largest only (relax_tolerance 1e-4 of the "
+     "the relax ends with its edge forces balanced to 1.9e-5 of the largest only (the relax step's tolerance, 1e-4 of the "
      "reference force); the weave, the crossings and the J-shaped curves pass"},
     {"fabric_matrix_biaxial",
      "the relax does not end: 265 increments and 107 cuts, then the increment at load factor 1 converges "
@@ -64,7 +64,7 @@ inline constexpr KnownFailure kKnownFailures[] = {
      "warp1.f1 and weft2.f2 through each other (an element 37.5 times the cap deep, elements 59 and 209, already "
      "flagged crossing earlier in the relax); a relax's end has nothing to cut"},
     {"fabric_unbalanced_biaxial",
-     "the relax ends with its edge forces balanced to 3.2e-6 of the largest only (relax_tolerance 1e-4 of the "
+     "the relax ends with its edge forces balanced to 3.2e-6 of the largest only (the relax step's tolerance, 1e-4 of the "
      "reference force); the warp's stiffness falls at level 3 (4723 N against 4738 N, -0.3 %)"},
     {"fabric_plain_shear_mirror",
      "the relaxed plain weave carries a shear force, 2.0 % of the largest edge force (x-force of the held edge.y+), "

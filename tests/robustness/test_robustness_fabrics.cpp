@@ -35,7 +35,7 @@ INSTANTIATE_TEST_SUITE_P(Robustness, FabricBiaxial,
 // its opposite: the curves are mirror images, F(+angle) = -F(-angle) at every level.
 // Tolerance: 1 % of the largest shear force; the two runs are mirror images except for the
 // order in which the solver meets the contacts, and each point is an equilibrium to 1e-4 of the
-// reference force (solver.test_tolerance). Each curve is also checked on its own: equilibrium
+// reference force (the test step's tolerance). Each curve is also checked on its own: equilibrium
 // at every level (1e-4, as the biaxial curves), the shear force of the angle's sign and growing
 // with it at every level (a sample sheared from rest resists more as it turns).
 // ---------------------------------------------------------------------------------------------

@@ -236,7 +236,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   // friction does not hold it, and with the r^2 weight (5.8e-5 N/m per node on the 480-fiber
   // sample) any shift of an indefinite tangent swamped it and stalled Newton; in relax steps,
   // the spin of the fibers near a tow end diverged as the drag fell (docs/theory/fabric.md).
-  // Weaving: along a fiber the drag is weaker (drag_axial), so the fibers slide along
+  // Weaving: along a fiber the drag is weaker (method.drag_axial, 0.01), so the fibers slide along
   // themselves as the tows crimp and the edges draw in, instead of stretching against a drag
   // that holds every node (docs/theory/fabric.md, "Drag along the fibers").
   m_problem->set_drag(weave ? m_case.solver.method.weave_drag * k0 : relax ? m_relax_drag : 0.0, m_drag_anchor,
@@ -305,8 +305,8 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     // at an increment where they did not move.
     const bool lagged = weave || (relax && !m_relax_settling);
     // A lagged increment is a pseudo-time state, not an equilibrium: its drag force is above
-    // the relax tolerance, so its Newton solves stop at the looser pseudo_tolerance (and the
-    // correction at the displacement tolerance scaled alike).
+    // the step's tolerance, so its Newton solves stop at the looser method.pseudo_tolerance
+    // (and the correction at the displacement tolerance scaled alike).
     m_newton_tolerance = lagged ? std::max(m_case.solver.method.pseudo_tolerance, m_case.solver.residual_tolerance)
                                 : m_case.solver.residual_tolerance;
     // Tests (biaxial, shear) with a drag: each solve only as exact as the state it is part of.
@@ -315,17 +315,17 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     // test: a Newton residual a hundredth of the drag force the increment is expected to leave
     // (the last increment's, or the last level's loading increment's for a level's first)
     // changes nothing of the sequence, where 1e-6 took 6-14 iterations per solve
-    // (solver.test_inexact).
+    // (method.test_inexact).
     // The bindings' tolerance (a length) is scaled alike: the proximal anchors' springs are
     // reset whenever a member moved more than it, and a solve that stops at the first iteration
     // moves nothing, so with the length left as it was the multipliers grew by one update at a
     // time, each solve stopping at once, until max_binding_updates failed the increment.
-    // A settling increment of a test level (drag force below test_tolerance) ends once the
-    // residual with its updated normals and cones is below test_tolerance; its Newton solves
-    // stop at a hundredth of that (test_inexact x test_tolerance): on the 480-fiber equibiaxial
-    // test they went on to residual_tolerance, 7-8 iterations and 2-3 more after a binding
-    // update per pass, where the last 2-4 changed the edge forces by less than 1e-5 of the
-    // reference force (docs/performance.md, session 22).
+    // A settling increment of a test level (drag force below the step's tolerance) ends once
+    // the residual with its updated normals and cones is below that tolerance; its Newton
+    // solves stop at a hundredth of it (method.test_inexact x the step's tolerance): on the
+    // 480-fiber equibiaxial test they went on to residual_tolerance, 7-8 iterations and 2-3
+    // more after a binding update per pass, where the last 2-4 changed the edge forces by less
+    // than 1e-5 of the reference force (docs/performance.md, "Test levels").
     m_tolerance_scale = 1.0;
     const bool test_with_drag = relax && m_relax_drag > 0.0 && m_case.steps[step].is_test();
     if (test_with_drag) {
@@ -415,7 +415,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     const double current_deepest = weave ? 0.0 : m_contact->penetration_ratio(m_problem->contacts(), m_q);
     if (lagged && (fresh_penetrate || deepest > 1.0 || raised > 0)) m_normals_settled = false;
     // A test level's settling increment: its state is a point of the curves once the fresh
-    // elements do not penetrate and the deepest penetration is within test_penetration_slack
+    // elements do not penetrate and the deepest penetration is within method.test_penetration_slack
     // of the cap; the penalties raised at this pass act from the next increment, as in a
     // lagged one. Holding the cap exactly took up to 6 more passes per level on the 480-fiber
     // equibiaxial test (deepest 1.013, 1.028, 1.102, 1.003, 1.003, 1.000 of the cap, one to six
@@ -481,12 +481,12 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     // raises (the detection carries each zone's raised penalty over): kept out while some zone
     // was raised at every pass, ten fresh elements 4.9 times the cap deep were never taken in
     // on the 480-fiber biaxial test at alpha = 0.5, every pass found them again, and the level
-    // failed after 12 cuts (docs/performance.md, session 22).
+    // failed after 12 cuts (docs/performance.md, "Test levels").
     // Nor when the detection sees a penetration deeper than any of the current elements: a
     // zone laid out afresh can hold an element where the current ones are not (matched to
     // one of them, so not fresh); kept out, its penetration was never resisted: on the
     // 480-fiber twill's last shear level one stayed at 2.43-2.50 times the cap through six
-    // passes of raises, and the loading failed (docs/performance.md, session 24).
+    // passes of raises, and the loading failed (docs/performance.md, "Test levels").
     if (raised > 0 && !fresh_penetrate && !(deepest > 1.0 && deepest > 1.01 * current_deepest)) {
       contacts = m_problem->contacts();
       continue;
@@ -552,7 +552,7 @@ bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, do
       // With the drift alone, a settling increment of the 480-fiber twill's shear, the fabric
       // still creeping under the drag, restarted Newton after every solve (drift 1e-6 to 3e-5 m
       // against 1e-7 m; violation 6e-10 m) and failed after 30 updates, ~350 s; 12 of level 1's
-      // 19 updates were drift alone (docs/performance.md, session 27).
+      // 19 updates were drift alone (docs/performance.md, "Bindings: the anchors' drift").
       const double pull = m_bodies->proximal_stiffness() * drift;
       const bool anchored = drift <= tolerance || pull <= 1e-3 * m_newton_tolerance * m_reference_force;
       if (debug_newton() && !(satisfied && anchored))
@@ -743,8 +743,8 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     // Solve H dq = -r. First by conjugate gradients preconditioned with the last factorization
     // (of an earlier tangent, maybe of another contact pattern), when there is one of the
     // unshifted tangent and the last such solve was quick; else, or when they do not converge
-    // within krylov_iterations, factorize (shifted if the tangent is not positive definite,
-    // which conjugate gradients may not notice).
+    // within the CG budget (krylov_budget, set at each factorization), factorize (shifted if
+    // the tangent is not positive definite, which conjugate gradients may not notice).
     auto t0 = std::chrono::steady_clock::now();
     double shift = 0.0;
     bool solved = false;
@@ -766,10 +766,10 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
                    seconds_since(t0), trace);
       }
       if (solved) ++m_stats.reused_factorizations;
-      // A slow solve (more than half of krylov_iterations): the factor has aged, the next
+      // A slow solve (more than half of the CG budget): the factor has aged, the next
       // iteration makes a new one. So also once the solves since the last factorization took,
-      // beyond the iterations of the first solve after it, krylov_iterations in all (the price
-      // of a factorization in iterations, ~100 on the 480-fiber tests): there a level's
+      // beyond the iterations of the first solve after it, the budget in all (the price of a
+      // factorization in iterations, 100 on the 480-fiber tests): there a level's
       // settling solves took 32-54 iterations each with an aged factor against 3-15 with a
       // fresh one, seven solves in a row below the per-solve threshold.
       // (Counted in iterations, not seconds: the solver's path stays the same from run to run.)
@@ -793,7 +793,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       // 480-fiber twill's shear (a body's free turn about z slightly negative through its
       // bindings, -2.5 against a mean diagonal of 2.7e6) each shifted iteration went through
       // 0, 1e-14, ..., 1e-6 of the mean diagonal: up to 6 factorizations, 27 s against 8 s
-      // (docs/performance.md, session 28).
+      // (docs/performance.md, "Shifted factorizations").
       FactorStatus st = m_linear->factorize(m_hessian, shift);
       ++m_stats.factorizations;
       while (st == FactorStatus::NotPositiveDefinite && shift < mean_diag) {
@@ -850,7 +850,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     // solves of an increment raise the residual by design. Counted as a stall, that rise turned
     // the line search on from the next solve's first iteration, where on the 480-fiber twill's
     // shear the energy test then held the steps to alpha = 0.1 for 9 iterations (the residual
-    // fell 6e-3 -> 2.6e-3) before full steps converged it in 4 (docs/performance.md, session 28).
+    // fell 6e-3 -> 2.6e-3) before full steps converged it in 4 (docs/performance.md, "Line search").
     const bool stalled =
         (searching && history[k - 1] > 1e3 * opt.residual_tolerance) || (k >= first + 4 && history[k - 1] > history[k - 2]) ||
         (k >= first + 7 && history[k - 1] > 1e3 * m_newton_tolerance &&
@@ -1252,9 +1252,10 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     auto t_increment = std::chrono::steady_clock::now();
     int done = 0, attempts = 0;
     // Relax steps (with contact): every increment is a proximal-point step, a drag towards the
-    // increment's start whose stiffness starts at relax_drag x k0, is divided by 4 or 2 after an
-    // easy increment and quadrupled after a failed one. The step ends once the loads are applied
-    // (lambda = 1), the drag's force at the end of an increment is below relax_tolerance times
+    // increment's start whose stiffness starts at the weave's drag, k0 (method.relax_drag: the
+    // stiffest), is divided by 4 or 2 after an easy increment and quadrupled (up to k0) after a
+    // failed one; a failure at k0 is cut. The step ends once the loads are applied (lambda = 1),
+    // the drag's force at the end of an increment is below the step's tolerance times
     // the reference force and the increment's normals, cones and penalties did not move: the
     // state is then an equilibrium without drag.
     // Biaxial and shear steps (tests of a woven fabric) take the same proximal increments, and
@@ -1274,25 +1275,26 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     // little about the next states: the floor falls as the drag does, and an early failure at a
     // high drag does not set the pace of the whole step (decaying by 0.7, such a floor took 22
     // easy increments to bring the 480-fiber relax's drag from 7e4 to 7 N/m). Close to it the
-    // states hardly change and a level that failed fails again (twice at 4.4 N/m in session
-    // 12's 480 relax, with the fast floor): there the floor decays by 0.7 per increment
-    // (docs/performance.md, session 12).
+    // states hardly change and a level that failed fails again (twice at 4.4 N/m in the
+    // 480-fiber relax, with the fast floor): there the floor decays by 0.7 per increment
+    // (docs/performance.md, "The relax drag and its floor").
     double failed_floor = 0.0;
     // Tests: m_test_drag is the drag that applied the last load level (its first accepted
     // increment). A level's first increment moves the edges; at the low drag the previous level
     // settled with it failed twice on the 480-fiber biaxial test (at 288 and 1 152 N/m, about 10
     // minutes each) before it converged at 4 608 N/m, so the next level starts at the drag that
     // applied this one. It goes on from the last test step of the run, or of the run whose state
-    // this one starts from (a restart from a test's checkpoint whose first level started from
-    // relax_drag failed twice on the 480-fiber biaxial test before it reached that drag again).
+    // this one starts from (a restart from a test's checkpoint whose first level started at
+    // a lower drag failed twice on the 480-fiber biaxial test before it reached that drag again).
     // Tests: failed attempts at the current level's loading increment (the one that moves the
     // edges; a failure while the level settles raises the drag and says nothing of the level's
     // size). A level loaded at the first attempt lets the next level grow by half, back towards
     // the requested size: a test level's loading increment takes 12-16 Newton iterations on the
     // fabrics, so the rule of the other steps (grow after at most 4) never fired there and the
-    // 480-fiber biaxial test, once cut to 1/32 of a level, stayed at that size (session 16:
-    // 2 % would have taken 5 hours). A level costs about as many settling increments whatever
-    // its size, so small levels waste time; a level that fails costs one Newton solve and a cut.
+    // 480-fiber biaxial test, once cut to 1/32 of a level, stayed at that size (2 % would have
+    // taken 5 hours; docs/performance.md, "Test levels"). A level costs about as many settling
+    // increments whatever its size, so small levels waste time; a level that fails costs one
+    // Newton solve and a cut.
     int level_failures = 0;
     // The first residual and load step of the last failed attempt at the current load factor.
     double failed_first = -1.0, failed_dl = 0.0;
@@ -1452,7 +1454,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         }
         // Easy increments: the drag falls, faster the easier they were. Once its force is
         // below the tolerance and only the normals are left to settle, it stays: a weaker drag
-        // would only risk a failure (session 12's 480 relax, at a drag force of 8.3e-5, went
+        // would only risk a failure (the 480-fiber relax, at a drag force of 8.3e-5, went
         // from 8.8 to 4.4 N/m and failed there after 25 iterations).
         const double fall = m_relax_settling ? 1.0 : iterations <= 12 ? 0.25 : iterations <= 30 ? 0.5 : 1.0;
         m_relax_drag = std::max(std::max(fall * m_relax_drag, relax_min), std::min(failed_floor, relax_max));
