@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fmt/format.h>
 #include <fstream>
+#include <optional>
 
 #include "fibra/body/bodies.hpp"
 #include "fibra/core/error.hpp"
@@ -24,6 +25,7 @@
 #include "fibra/io/slice.hpp"
 #include "fibra/model/fabric_report.hpp"
 #include "fibra/model/model.hpp"
+#include "fibra/run/resolve.hpp"
 #include "fibra/run/run_case.hpp"
 #include "fibra/solver/blas_threads.hpp"
 #include "fibra/solver/static_solver.hpp"
@@ -36,8 +38,8 @@ bool interactive() { return isatty(STDERR_FILENO) && std::getenv("CI") == nullpt
 
 int check(const std::string& path) {
   const fibra::Case c = fibra::read_case(path);
-  const fibra::Model model = fibra::build_model(c);
-  fibra::StaticSolver solver(c, model);  // resolves every node reference
+  const fibra::ResolvedCase resolved = fibra::resolve_case(c);  // every reference and input error
+  const fibra::Model& model = resolved.model;
   fmt::print("{}: valid: {} materials, {} fibers, {} nodes, {} dofs, {} steps\n", path, c.materials.size(),
              c.fibers.size(), model.num_nodes(), model.num_dofs(), c.steps.size());
   return 0;
@@ -162,11 +164,13 @@ int generate(const std::string& path, std::string out) {
   const fibra::Case c = fibra::read_case(path);
   const std::string stem = fs::path(path).stem().string();
   if (out.empty()) out = stem + "_generated";
-  const fibra::Model model = fibra::build_model(c);
-  // Checks the case as `check` and `run` do (every node reference, the bindings); its bodies
-  // give the members' positions for bodies.pvd.
-  const fibra::StaticSolver solver(c, model);
-  const fibra::BodySystem* bodies = solver.bodies();
+  // Resolved as `check` and `run` resolve it (every reference, the bindings); its bodies give
+  // the members' positions for bodies.pvd.
+  const fibra::ResolvedCase resolved = fibra::resolve_case(c);
+  const fibra::Model& model = resolved.model;
+  const std::optional<fibra::BodySystem> body_system =
+      model.bodies.empty() ? std::nullopt : std::make_optional<fibra::BodySystem>(c, model);
+  const fibra::BodySystem* bodies = body_system ? &*body_system : nullptr;
 
   std::vector<std::string> files;
   {

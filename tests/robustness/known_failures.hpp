@@ -66,6 +66,12 @@ inline constexpr KnownFailure kKnownFailures[] = {
     {"fabric_unbalanced_biaxial",
      "the relax ends with its edge forces balanced to 3.2e-6 of the largest only (the relax step's tolerance, 1e-4 of the "
      "reference force); the warp's stiffness falls at level 3 (4723 N against 4738 N, -0.3 %)"},
+    {"fabric_tight_biaxial",
+     "the weave, the relax (edge forces balanced to 4.8e-7), the crossings and the equilibrium of every level pass; "
+     "the curves' stiffness falls at the last level, warp 3271 N against 3275 N, weft 3272 N against 3273 N "
+     "(-0.1 %), where the tight sample's curves are straight (its fibers stretch, the crimp gone): the 0.01 N "
+     "by which the last level falls short is 3 times the level's equilibrium tolerance (1e-4 of the reference "
+     "force), so friction's path, not the solver's tolerance, decides the sign of that difference"},
     {"fabric_plain_shear_mirror",
      "the relaxed plain weave carries a shear force, 2.0 % of the largest edge force (x-force of the held edge.y+), "
      "and the curves at +5 and -5 degrees differ by 15 % of the largest shear force (0.72 N at 5 degrees): the "

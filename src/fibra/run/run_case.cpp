@@ -1,5 +1,7 @@
 #include "fibra/run/run_case.hpp"
 
+#include "fibra/run/resolve.hpp"
+
 #include <algorithm>
 #include <omp.h>
 
@@ -23,6 +25,7 @@
 #include "fibra/model/fabric_report.hpp"
 #include "fibra/model/model.hpp"
 #include "fibra/run/curve_plotter.hpp"
+#include "fibra/run/resolve.hpp"
 #include "fibra/solver/solver_state.hpp"
 
 namespace fibra {
@@ -57,11 +60,12 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   }
   // An output directory that cannot be written stops the run before anything is computed.
   prepare_output_dir(options.out_dir, output_subdirs(c));
-  const Model model = build_model(c);
+  const ResolvedCase resolved = resolve_case(c);
+  const Model& model = resolved.model;
   StaticSolver solver(c, model);
   if (options.progress) solver.set_progress(options.progress);
   // [start]: the run goes on from the state an earlier run saved at the end of its last step.
-  if (!c.start.empty()) solver.restore_state(read_state_file(c.start_state), c.start_state);
+  if (resolved.start) solver.restore_state(*resolved.start);
   const VecX initial = solver.state();
   std::vector<std::string> columns = solver.reaction_columns();
   const std::vector<std::string> contact_columns = {

@@ -232,4 +232,23 @@ SolverState read_state_file(const std::string& path) {
   return s;
 }
 
+void check_state_fits(const SolverState& s, const Model& model, Index bindings, const std::string& file) {
+  const ModelFingerprint here = fingerprint(model, bindings);
+  if (!(s.model == here))
+    throw InputError(file, "(file)",
+                     fmt::format("the state belongs to another model ({} dofs, {} elements, {} bodies, {} bindings; "
+                                 "this case has {}, {}, {}, {})",
+                                 s.model.dofs, s.model.elements, s.model.bodies, s.model.bindings, here.dofs,
+                                 here.elements, here.bodies, here.bindings));
+  const double moved = (s.reference - model.reference).cwiseAbs().maxCoeff();
+  if (moved > 1e-9 * model.length_scale)
+    throw InputError(file, "(file)",
+                     fmt::format("the state belongs to another model: its reference configuration differs by {:.3e} m",
+                                 moved));
+  for (const auto& [dof, d] : s.disp)
+    if (dof < 0 || dof >= here.dofs) throw InputError(file, "(file)", "a prescribed dof out of range: corrupt");
+  for (const auto& [node, m] : s.moments)
+    if (node < 0 || node >= model.num_nodes()) throw InputError(file, "(file)", "a moment's node out of range: corrupt");
+}
+
 }  // namespace fibra

@@ -50,5 +50,9 @@ void write_state_file(const std::string& path, const SolverState& state);
 /// Reads a state file; throws InputError naming `path` if it is missing, truncated or not a
 /// state file of this version.
 SolverState read_state_file(const std::string& path);
+/// Checks that `state` (read from `path`) belongs to `model` with `bindings` bindings: its
+/// fingerprint, its reference configuration, its prescribed dofs and moments; throws
+/// InputError naming `path` and what differs.
+void check_state_fits(const SolverState& state, const Model& model, Index bindings, const std::string& path);
 
 }  // namespace fibra

@@ -97,37 +97,11 @@ StaticSolver::StaticSolver(const Case& c, const Model& model)
       add_reaction(ref, model.node_index(ref, c.file, fmt::format("step[{}].displacement[{}]", s, i)));
     }
   }
-  // Rigid bodies: history columns, and no force on a component that is prescribed.
+  // Rigid bodies: history columns.
   if (m_bodies) {
     for (const Body& b : model.bodies)
       for (const char* col : {"fx", "fy", "fz", "mx", "my", "mz", "ux", "uy", "uz", "rx", "ry", "rz"})
         m_reaction_columns.push_back(fmt::format("body:{}:{}", b.name, col));
-    std::vector<std::string> held(model.num_dofs());  // step name that prescribes the dof, or ""
-    for (size_t s = 0; s < c.steps.size(); ++s)
-      for (size_t i = 0; i < c.steps[s].bodies.size(); ++i) {
-        const BodyStepSpec& bs = c.steps[s].bodies[i];
-        const std::string key = fmt::format("step[{}].body[{}]", s, i);
-        const int b = model.body_index(bs.name);
-        if (b < 0) throw InputError(c.file, key + ".name", fmt::format("no body named \"{}\"", bs.name));
-        const Index d0 = model.bodies[b].first_dof;
-        for (int k = 0; k < 3; ++k) {
-          if (bs.has_displacement) held[d0 + k] = bs.displacement[k] ? c.steps[s].name : "";
-          if (bs.has_rotation) held[d0 + 3 + k] = bs.rotation[k] ? c.steps[s].name : "";
-        }
-        const char* axis[3] = {"x", "y", "z"};
-        for (int k = 0; k < 3; ++k) {
-          if (bs.force && (*bs.force)[k] != 0.0 && !held[d0 + k].empty())
-            throw InputError(c.file, key + ".force",
-                             fmt::format("a force along {} on body \"{}\", whose displacement along {} is prescribed "
-                                         "(since step \"{}\"): release it with \"free\" or drop the force",
-                                         axis[k], bs.name, axis[k], held[d0 + k]));
-          if (bs.moment && (*bs.moment)[k] != 0.0 && !held[d0 + 3 + k].empty())
-            throw InputError(c.file, key + ".moment",
-                             fmt::format("a moment about {} on body \"{}\", whose rotation about {} is prescribed "
-                                         "(since step \"{}\"): release it with \"free\" or drop the moment",
-                                         axis[k], bs.name, axis[k], held[d0 + 3 + k]));
-        }
-      }
   }
   m_force_scale = VecX::Ones(n);
   m_length_scale = VecX::Ones(n);
@@ -150,13 +124,9 @@ StaticSolver::StaticSolver(const Case& c, const Model& model)
   for (size_t t = 0; t < c.tows.size(); ++t)
     for (const std::string& name : c.tows[t].fibers) {
       const int f = model.fiber_index(name);
-      if (f < 0) throw InputError(c.file, fmt::format("tow[{}].fibers", t), fmt::format("no fiber named \"{}\"", name));
+      if (f < 0) throw std::logic_error("StaticSolver: a tow's fiber not in the model (resolve_case checks it)");
       m_fiber_tow[f] = {c.tows[t].direction == TowSpec::Direction::Warp ? 0 : 1, c.tows[t].index};
     }
-  for (size_t s = 0; s < c.steps.size(); ++s)
-    if (c.steps[s].kind == StepSpec::Kind::Weave && (!c.contact.enabled || c.tows.empty() || c.weave.empty()))
-      throw InputError(c.file, fmt::format("step[{}].kind", s),
-                       "a weave step needs [contact], tows ([[tow]] or [fabric]) and a weave matrix ([weave] or [fabric])");
   if (c.contact.enabled) {
     m_contact = std::make_unique<ContactManager>(model, c.contact);
     double rmin = std::numeric_limits<double>::infinity();
@@ -913,10 +883,7 @@ void StaticSolver::test_conditions(int step, std::map<Index, std::pair<double, d
   int edge[4];
   for (int e = 0; e < 4; ++e) {
     edge[e] = m_model.body_index(kEdgeBodies[e]);
-    if (edge[e] < 0)
-      throw InputError(m_case.file, fmt::format("step[{}].kind", step),
-                       fmt::format("a {} step drives the fabric's edge bodies; there is no body \"{}\"",
-                                   StepSpec::kind_name(st.kind), kEdgeBodies[e]));
+    if (edge[e] < 0) throw std::logic_error("StaticSolver: a test step without edge bodies (resolve_case checks it)");
   }
   auto dof = [&](int e, int k) { return m_model.bodies[edge[e]].first_dof + k; };
   auto u = [&](int e, int k) { return m_q[dof(e, k)] - m_model.reference[dof(e, k)]; };
@@ -966,9 +933,7 @@ void StaticSolver::test_conditions(int step, std::map<Index, std::pair<double, d
   if (m_program->force_end[dof(1, 0)] != 0.0) disp.erase(dof(1, 0));
   if (st.free_height) {
     if (m_program->force_end[dof(3, 1)] == 0.0)
-      throw InputError(m_case.file, fmt::format("step[{}].height", step),
-                       "height = \"free\" leaves the top edge (edge.y+) under the force it had across the shear, and "
-                       "it has none: give the fabric a weft tension ([fabric] tension) or hold the height (\"held\")");
+      throw std::logic_error("StaticSolver: a shear with its height free and no force across (resolve_case checks it)");
     disp.erase(dof(3, 1));
   }
   for (int e : {0, 1}) {
@@ -1139,30 +1104,13 @@ SolverState StaticSolver::save_state(const std::string& step, int steps_done) co
   return s;
 }
 
-void StaticSolver::restore_state(const SolverState& s, const std::string& file) {
-  const ModelFingerprint here = fingerprint(m_model, m_bodies ? m_bodies->num_bindings() : 0);
-  if (!(s.model == here))
-    throw InputError(file, "(file)",
-                     fmt::format("the state belongs to another model ({} dofs, {} elements, {} bodies, {} bindings; "
-                                 "this case has {}, {}, {}, {})",
-                                 s.model.dofs, s.model.elements, s.model.bodies, s.model.bindings, here.dofs,
-                                 here.elements, here.bodies, here.bindings));
-  const double moved = (s.reference - m_model.reference).cwiseAbs().maxCoeff();
-  if (moved > 1e-9 * m_model.length_scale)
-    throw InputError(file, "(file)",
-                     fmt::format("the state belongs to another model: its reference configuration differs by {:.3e} m",
-                                 moved));
-  for (const auto& [dof, d] : s.disp)
-    if (dof < 0 || dof >= here.dofs) throw InputError(file, "(file)", "a prescribed dof out of range: corrupt");
-  for (const auto& [node, m] : s.moments)
-    if (node < 0 || node >= m_model.num_nodes()) throw InputError(file, "(file)", "a moment's node out of range: corrupt");
+void StaticSolver::restore_state(const SolverState& s) {
+  // A resolved state (resolve_case: check_state_fits, and the bodies' restore tried on a copy).
+  if (!(s.model == fingerprint(m_model, m_bodies ? m_bodies->num_bindings() : 0)))
+    throw std::logic_error("StaticSolver::restore_state: a state of another model (resolve_case checks it)");
   m_q = s.q;
   if (m_bodies) {
-    try {
-      m_bodies->restore(s.bodies);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(file, "(file)", fmt::format("the bodies' state does not fit this case: {}", e.what()));
-    }
+    m_bodies->restore(s.bodies);
   }
   if (m_contact && m_problem->set_contacts(s.contacts, m_contact->friction())) m_linear->analyze(m_problem->pattern());
   m_program->force_start = m_program->force_end = s.force_end;

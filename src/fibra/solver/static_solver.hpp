@@ -85,7 +85,8 @@ std::atomic<bool>& interrupt_flag();
 /// Runs the steps of a case on its model.
 class StaticSolver {
  public:
-  /// Resolves constraints and loads of `c` against `model` (throws InputError on bad refs).
+  /// Sets up the run of a resolved case (resolve_case: every reference of `c` found in
+  /// `model`, every input error raised there); an unresolved one is a logic error.
   StaticSolver(const Case& c, const Model& model);
   ~StaticSolver();
 
@@ -101,9 +102,9 @@ class StaticSolver {
   /// The state after the last converged increment, for state.bin (solver_state.hpp): call it
   /// at a step's end (from the observer of the step's last increment).
   SolverState save_state(const std::string& step, int steps_done) const;
-  /// Starts the run from a saved state instead of the reference configuration (before run()).
-  /// Throws InputError naming `file` when the state belongs to another model.
-  void restore_state(const SolverState& state, const std::string& file);
+  /// Starts the run from a saved state instead of the reference configuration (before run()):
+  /// a state resolve_case has checked against this model (ResolvedCase::start).
+  void restore_state(const SolverState& state);
   /// Progress callback (one line per increment); default none.
   void set_progress(std::function<void(const std::string&)> progress) { m_progress = std::move(progress); }
 

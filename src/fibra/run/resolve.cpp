@@ -1,0 +1,126 @@
+#include "fibra/run/resolve.hpp"
+
+#include <fmt/format.h>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "fibra/body/bodies.hpp"
+#include "fibra/core/error.hpp"
+#include "fibra/model/fabric.hpp"
+
+namespace fibra {
+namespace {
+
+/// Every node a fix, a load or a prescribed displacement names exists.
+void resolve_nodes(const Case& c, const Model& model) {
+  for (size_t i = 0; i < c.fixes.size(); ++i) model.node_index(c.fixes[i].node, c.file, fmt::format("fix[{}]", i));
+  for (size_t s = 0; s < c.steps.size(); ++s) {
+    const StepSpec& st = c.steps[s];
+    for (size_t i = 0; i < st.loads.size(); ++i)
+      model.node_index(st.loads[i].node, c.file, fmt::format("step[{}].load[{}]", s, i));
+    for (size_t i = 0; i < st.displacements.size(); ++i)
+      model.node_index(st.displacements[i].node, c.file, fmt::format("step[{}].displacement[{}]", s, i));
+  }
+}
+
+/// Every body a step names exists, and no step loads a component that is prescribed (by this
+/// entry or since an earlier step): a prescribed component takes no load, its reaction is
+/// computed.
+void resolve_step_bodies(const Case& c, const Model& model) {
+  std::vector<std::string> held(model.num_dofs());  // the step that prescribes the dof, or ""
+  for (size_t s = 0; s < c.steps.size(); ++s)
+    for (size_t i = 0; i < c.steps[s].bodies.size(); ++i) {
+      const BodyStepSpec& bs = c.steps[s].bodies[i];
+      const std::string key = fmt::format("step[{}].body[{}]", s, i);
+      const int b = model.body_index(bs.name);
+      if (b < 0) throw InputError(c.file, key + ".name", fmt::format("no body named \"{}\"", bs.name));
+      const Index d0 = model.bodies[b].first_dof;
+      for (int k = 0; k < 3; ++k) {
+        if (bs.has_displacement) held[d0 + k] = bs.displacement[k] ? c.steps[s].name : "";
+        if (bs.has_rotation) held[d0 + 3 + k] = bs.rotation[k] ? c.steps[s].name : "";
+      }
+      static constexpr const char* kAxis[3] = {"x", "y", "z"};
+      for (int k = 0; k < 3; ++k) {
+        if (bs.force && (*bs.force)[k] != 0.0 && !held[d0 + k].empty())
+          throw InputError(c.file, key + ".force",
+                           fmt::format("a force along {} on body \"{}\", whose displacement along {} is prescribed "
+                                       "(since step \"{}\"): release it with \"free\" or drop the force",
+                                       kAxis[k], bs.name, kAxis[k], held[d0 + k]));
+        if (bs.moment && (*bs.moment)[k] != 0.0 && !held[d0 + 3 + k].empty())
+          throw InputError(c.file, key + ".moment",
+                           fmt::format("a moment about {} on body \"{}\", whose rotation about {} is prescribed "
+                                       "(since step \"{}\"): release it with \"free\" or drop the moment",
+                                       kAxis[k], bs.name, kAxis[k], held[d0 + 3 + k]));
+      }
+    }
+}
+
+/// The weave and test steps find what they drive: tows and a weave matrix with contact, the
+/// fabric's four edge bodies; a shear with its height free finds the force across its top edge
+/// that it keeps (the weft tension), from the state it starts from and the steps before it.
+void resolve_fabric_steps(const Case& c, const Model& model, const std::optional<SolverState>& start) {
+  for (size_t t = 0; t < c.tows.size(); ++t)
+    for (const std::string& name : c.tows[t].fibers)
+      if (model.fiber_index(name) < 0)
+        throw InputError(c.file, fmt::format("tow[{}].fibers", t), fmt::format("no fiber named \"{}\"", name));
+  const int top = model.body_index(kEdgeBodies[3]);
+  // The force along y on the top edge in force at the start of each step (the loads carry on
+  // from step to step; an entry replaces them).
+  double top_force = top >= 0 && start ? start->force_end[model.bodies[top].first_dof + 1] : 0.0;
+  for (size_t s = 0; s < c.steps.size(); ++s) {
+    const StepSpec& st = c.steps[s];
+    if (st.kind == StepSpec::Kind::Weave && (!c.contact.enabled || c.tows.empty() || c.weave.empty()))
+      throw InputError(c.file, fmt::format("step[{}].kind", s),
+                       "a weave step needs [contact], tows ([[tow]] or [fabric]) and a weave matrix ([weave] or [fabric])");
+    if (st.is_test()) {
+      for (const char* edge : kEdgeBodies)
+        if (model.body_index(edge) < 0)
+          throw InputError(c.file, fmt::format("step[{}].kind", s),
+                           fmt::format("a {} step drives the fabric's edge bodies; there is no body \"{}\"",
+                                       StepSpec::kind_name(st.kind), edge));
+      if (st.kind == StepSpec::Kind::Shear && st.free_height && top_force == 0.0)
+        throw InputError(c.file, fmt::format("step[{}].height", s),
+                         "height = \"free\" leaves the top edge (edge.y+) under the force it had across the shear, "
+                         "and it has none: give the fabric a weft tension ([fabric] tension) or hold the height "
+                         "(\"held\")");
+    }
+    for (const BodyStepSpec& bs : st.bodies)
+      if (top >= 0 && bs.name == kEdgeBodies[3] && bs.force) top_force = (*bs.force)[1];
+  }
+}
+
+/// The state a [start] goes on from belongs to this model.
+void resolve_start(const Case& c, const Model& model, const BodySystem* bodies, const SolverState& s) {
+  const std::string& file = c.start_state;
+  check_state_fits(s, model, bodies ? bodies->num_bindings() : 0, file);
+  if (bodies) {
+    BodySystem copy = *bodies;
+    try {
+      copy.restore(s.bodies);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(file, "(file)", fmt::format("the bodies' state does not fit this case: {}", e.what()));
+    }
+  }
+}
+
+}  // namespace
+
+ResolvedCase resolve_case(const Case& c) {
+  ResolvedCase r{build_model(c), std::nullopt};
+  resolve_nodes(c, r.model);
+  // The bindings: bodies, members and grips, resolved against the model's geometry (a bound
+  // node's section vectors, members that define a mean rotation) as the body system is built.
+  std::optional<BodySystem> bodies;
+  if (!r.model.bodies.empty()) bodies.emplace(c, r.model);
+  resolve_step_bodies(c, r.model);
+  if (!c.start.empty()) {
+    r.start = read_state_file(c.start_state);
+    resolve_start(c, r.model, bodies ? &*bodies : nullptr, *r.start);
+  }
+  resolve_fabric_steps(c, r.model, r.start);
+  return r;
+}
+
+}  // namespace fibra

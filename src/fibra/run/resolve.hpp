@@ -1,0 +1,26 @@
+#pragma once
+/// The resolution stage between a case and its solver. Everything a case file refers to is
+/// found here (nodes, fibers, bodies, bindings, the state a [start] goes on from) and every
+/// input error is raised here, before anything is computed: `fibra check` resolves a case and
+/// builds no solver, and a run that starts does not stop on an input error an hour later (a
+/// shear step's conditions, say, once the weaving is done). The solver takes a resolved case
+/// and raises no input error.
+#include <optional>
+
+#include "fibra/model/case.hpp"
+#include "fibra/model/model.hpp"
+#include "fibra/solver/solver_state.hpp"
+
+namespace fibra {
+
+/// A case whose references are resolved: its model, and the state its [start] goes on from.
+struct ResolvedCase {
+  Model model;
+  std::optional<SolverState> start;  ///< the [start] state, checked against the model
+};
+
+/// Builds the model and checks every reference and condition of the case against it; throws
+/// InputError (file, key, what was expected) on the first that fails.
+ResolvedCase resolve_case(const Case& c);
+
+}  // namespace fibra
