@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "fibra/io/case_reader.hpp"
+#include "fibra/run/run_case.hpp"
 #include "support/scratch_dir.hpp"
 
 namespace fibra {
@@ -121,6 +123,32 @@ TEST_F(OutputErrors, SeriesAreInSubfoldersOfTheOutputDirectory) {
   }
   for (const auto& e : fs::directory_iterator(m_dir / "out"))
     EXPECT_NE(e.path().extension(), ".vtu") << e.path();
+}
+
+// summary.json exists from the run's start, "running" with the last converged increment, so
+// that a run killed by the system says how far it got; the final summary replaces it.
+TEST_F(OutputErrors, TheSummarySaysHowFarARunningRunGot) {
+  Case c = parse_case_toml(kCase, (m_dir / "beam.toml").string());
+  RunOptions options;
+  options.out_dir = (m_dir / "running").string();
+  std::vector<nlohmann::json> seen;  // the summary as each increment starts being reported
+  options.progress = [&](const std::string&) {
+    seen.push_back(nlohmann::json::parse(test::slurp(m_dir / "running" / "summary.json")));
+  };
+  const RunReport r = run_case(c, options);
+  ASSERT_EQ(r.result.status, RunResult::Status::Converged) << r.result.message;
+  ASSERT_EQ(seen.size(), 5u);
+  for (size_t k = 0; k < seen.size(); ++k) {
+    EXPECT_EQ(seen[k]["status"], "running");
+    // The progress line of increment k + 1 comes before its outputs: the summary has the one before.
+    EXPECT_EQ(seen[k]["progress"]["total_increments"], static_cast<int>(k));
+    EXPECT_EQ(seen[k]["progress"]["steps"], 1);
+  }
+  EXPECT_EQ(seen[4]["progress"]["step"], "load");
+  EXPECT_NEAR(seen[4]["progress"]["load_factor"].get<double>(), 0.8, 1e-12);
+  const nlohmann::json final = nlohmann::json::parse(test::slurp(m_dir / "running" / "summary.json"));
+  EXPECT_EQ(final["status"], "converged");
+  EXPECT_FALSE(final.contains("progress"));
 }
 
 }  // namespace

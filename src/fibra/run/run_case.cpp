@@ -125,6 +125,27 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     curves.flush();
   };
   nlohmann::json states = nlohmann::json::array();  // the state files written at step ends
+  // summary.json exists from the run's start: "running", with the last converged increment,
+  // rewritten after each one, so that a run killed by the system says how far it got (the
+  // final summary replaces it when the run ends, whatever its status).
+  auto running_summary = [&](const IncrementInfo* info) {
+    nlohmann::json j;
+    j["case"] = c.file;
+    j["title"] = c.title;
+    j["status"] = "running";
+    j["converged"] = false;
+    j["progress"] = info ? nlohmann::json{{"step", info->step},
+                                          {"step_number", info->step_index + 1},
+                                          {"steps", c.steps.size()},
+                                          {"increment", info->increment},
+                                          {"load_factor", info->load_factor},
+                                          {"total_increments", info->total_increments}}
+                         : nlohmann::json{{"step", nullptr}, {"step_number", 0}, {"steps", c.steps.size()},
+                                          {"increment", 0}, {"load_factor", 0.0}, {"total_increments", 0}};
+    j["wall_time"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    j["states"] = states;
+    writer.write_summary(j);
+  };
   auto observe = [&](const IncrementInfo& info, const VecX& q) {
     const StepSpec& st = c.steps[info.step_index];
     if (edges && st.is_test() && info.step_index != curves_step) {
@@ -246,6 +267,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     time_output += std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
     // The plots of a test step once its curves are complete (after its history is written).
     if (info.step_end && info.step_index == curves_step) plotter.plot(curves_step);
+    running_summary(&info);
   };
   // A failed write (a full disk, a file in place of a subfolder) stops the run at the
   // increment it happened, named in the error; every file written before it is kept.
@@ -288,6 +310,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   }
   writer.write_increment(initial, HistoryRow{"initial", -1, 0, 0.0, 0, 0.0, 0.0, initial_extra}, 0.0, true,
                          nullptr, bodies ? &initial_bodies : nullptr);
+  running_summary(nullptr);
   RunReport report;
   try {
     report.result = solver.run(observer);
