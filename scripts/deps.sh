@@ -1,5 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages fibra needs (only those missing). Run as root.
+#   bash scripts/deps.sh            build, tests, benchmarks, plots
+#   bash scripts/deps.sh sanitize   also Clang with its sanitizer and libFuzzer run-times, its
+#                                   OpenMP and llvm-symbolizer (scripts/sanitize.sh, scripts/fuzz.sh)
 set -euo pipefail
 packages=(
   build-essential cmake pkg-config git
@@ -8,6 +11,11 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-matplotlib
 )
+case "${1:-}" in
+  "") ;;
+  sanitize) packages+=(clang-14 libclang-rt-14-dev libomp-14-dev llvm-14) ;;
+  *) echo "usage: deps.sh [sanitize]" >&2; exit 2 ;;
+esac
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -116,6 +116,22 @@ TEST(Packing, TinyFibersArePackedAtOnce) {
   }
 }
 
+// A tow far wider than its fibers (a width of 50 m for fibers of 50 um, a typo of the kind the
+// fuzzing of the case readers made: docs/sanitizers.md): its lattices have millions of sites, each
+// formerly sampled along its disc in every step of the bisection (25 s on the reference machine,
+// more than a minute instrumented); now a second or two.
+TEST(Packing, WideTowsArePackedAtOnce) {
+  const double r = 5e-5, width = 50.0, thickness = 2.5e-4;
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<Eigen::Vector2d> p = pack_ellipse(3, r, width, thickness);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 10.0);
+  ASSERT_EQ(p.size(), 3u);
+  for (const auto& c : p)
+    EXPECT_LE(std::pow(c.x() / (0.5 * width - r), 2) + std::pow(c.y() / (0.5 * thickness - r), 2), 1.0);
+  EXPECT_GT(std::abs((p[1] - p[0]).x() * (p[2] - p[0]).y() - (p[1] - p[0]).y() * (p[2] - p[0]).x()), 0.0)
+      << "three sites on one line";
+}
+
 // The size read_case checks before expanding is that of the expansion: fibers, their elements
 // (the fewest not longer than the element length, at least 2) and bodies.
 TEST(FabricExpansion, SizeBeforeExpandingIsTheExpansions) {

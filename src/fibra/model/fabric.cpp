@@ -130,21 +130,40 @@ namespace {
 
 /// Hexagonal lattice sites (spacing d, rows along the width; `phase` 0: a row through the
 /// centre, 1: the centre between two rows) whose disc of radius r lies in the ellipse.
-std::vector<Eigen::Vector2d> lattice_sites(double d, int phase, double r, double a, double b) {
+/// Only the columns |l| <= max_cols when given (those near the centre, in lattice order).
+std::vector<Eigen::Vector2d> lattice_sites(double d, int phase, double r, double a, double b,
+                                           int max_cols = INT_MAX) {
   std::vector<Eigen::Vector2d> out;
   const double h = d * std::sqrt(3.0) / 2.0;
   const int rows = static_cast<int>(std::ceil(b / h)) + 1;
-  const int cols = static_cast<int>(std::ceil(a / d)) + 1;
+  const int cols = std::min(static_cast<int>(std::ceil(a / d)) + 1, max_cols);
+  const double rs = r * 1.001;
   for (int k = -rows; k <= rows; ++k) {
     const double y = (k + 0.5 * phase) * h;
+    // A row whose top (or bottom) sample, computed as below, is above the ellipse's height has
+    // no site: that sample is outside whatever x.
+    const double t_top = 2.0 * std::numbers::pi * (y >= 0 ? 24 : 72) / 96;
+    const double y_top = y + rs * std::sin(t_top);
+    if ((y_top / b) * (y_top / b) > 1.0) continue;
     const double shift = ((k % 2) + 2) % 2 == 1 ? 0.5 * d : 0.0;
     for (int l = -cols; l <= cols; ++l) {
       const double x = l * d + shift;
       // The disc inside the ellipse: its boundary sampled finely (sag 5.4e-4 r, below the 1e-3 r margin).
+      // Decided first without the samples where they cannot differ: a centre outside the ellipse
+      // leaves some sample outside (the ellipse is convex); the corner (|x| + r', |y| + r') of the
+      // disc's box inside it leaves every sample inside (|x + r' cos t| <= |x| + r', also rounded).
+      // A tow thousands of fibers wide has as many sites in a row, each sampled in every step of
+      // pack_ellipse's bisection otherwise.
+      if ((x / a) * (x / a) + (y / b) * (y / b) > 1.0) continue;
+      const double cx = std::abs(x) + rs, cy = std::abs(y) + rs;
       bool inside = true;
+      if ((cx / a) * (cx / a) + (cy / b) * (cy / b) <= 1.0) {
+        out.emplace_back(x, y);
+        continue;
+      }
       for (int s = 0; s < 96 && inside; ++s) {
         const double t = 2.0 * std::numbers::pi * s / 96;
-        const double px = x + r * 1.001 * std::cos(t), py = y + r * 1.001 * std::sin(t);
+        const double px = x + rs * std::cos(t), py = y + rs * std::sin(t);
         inside = (px / a) * (px / a) + (py / b) * (py / b) <= 1.0;
       }
       if (inside) out.emplace_back(x, y);
@@ -169,14 +188,37 @@ std::vector<Eigen::Vector2d> pack_ellipse(int count, double r, double width, dou
   const double a = 0.5 * width, b = 0.5 * thickness;
   if (count <= 0 || r <= 0 || a < r || b < r) return {};
   // The sites for spacing d (rows offset from the centre first), or none.
-  auto best_for = [&](double d) -> std::vector<Eigen::Vector2d> {
+  const auto measure = [&](const Eigen::Vector2d& p) { return (p.x() / a) * (p.x() / a) + (p.y() / b) * (p.y() / b); };
+  // The `count` sites nearest the centre in the ellipse's measure, ties in lattice order (the
+  // first `count` of a stable sort), or none if there are fewer; selected without sorting the
+  // whole lattice.
+  const auto nearest = [&](const std::vector<Eigen::Vector2d>& s) -> std::vector<Eigen::Vector2d> {
+    if (static_cast<int>(s.size()) < count) return {};
+    std::vector<std::pair<double, size_t>> order(s.size());
+    for (size_t i = 0; i < s.size(); ++i) order[i] = {measure(s[i]), i};
+    std::partial_sort(order.begin(), order.begin() + count, order.end());
+    std::vector<Eigen::Vector2d> out(static_cast<size_t>(count));
+    for (int i = 0; i < count; ++i) out[i] = s[order[i].second];
+    return out;
+  };
+  // A tow many fibers wide has a lattice of millions of sites, listed in each step of the
+  // bisection: the columns near the centre are listed first, |l| <= count + 2. A site of a
+  // column beyond has |x| >= (count + 2.5) d, so a measure of at least that over a squared plus
+  // the least (y / b)^2 of the rows; if the count-th nearest site listed is nearer (with a
+  // margin for rounding), the whole lattice has the same nearest sites in the same order.
+  const auto best_for = [&](double d) -> std::vector<Eigen::Vector2d> {
+    const double h = d * std::sqrt(3.0) / 2.0;
     for (int phase : {1, 0}) {
-      std::vector<Eigen::Vector2d> s = lattice_sites(d, phase, r, a, b);
-      if (static_cast<int>(s.size()) < count) continue;
-      std::stable_sort(s.begin(), s.end(), [&](const Eigen::Vector2d& p, const Eigen::Vector2d& q) {
-        return (p.x() / a) * (p.x() / a) + (p.y() / b) * (p.y() / b) < (q.x() / a) * (q.x() / a) + (q.y() / b) * (q.y() / b);
-      });
-      s.resize(count);
+      std::vector<Eigen::Vector2d> s;
+      if (std::ceil(a / d) + 1 > count + 2) {
+        const double ymin = phase == 1 ? 0.5 * h / b : 0.0;
+        const double beyond = std::pow((count + 2.5) * d / a, 2) + ymin * ymin;
+        s = nearest(lattice_sites(d, phase, r, a, b, count + 2));
+        if (s.empty() || !(measure(s.back()) < beyond * (1.0 - 1e-9))) s = nearest(lattice_sites(d, phase, r, a, b));
+      } else {
+        s = nearest(lattice_sites(d, phase, r, a, b));
+      }
+      if (s.empty()) continue;
       if (count >= 3 && collinear(s)) continue;
       return s;
     }

@@ -91,20 +91,6 @@ void resolve_fabric_steps(const Case& c, const Model& model, const std::optional
   }
 }
 
-/// The state a [start] goes on from belongs to this model.
-void resolve_start(const Case& c, const Model& model, const BodySystem* bodies, const SolverState& s) {
-  const std::string& file = c.start_state;
-  check_state_fits(s, model, bodies ? bodies->num_bindings() : 0, file);
-  if (bodies) {
-    BodySystem copy = *bodies;
-    try {
-      copy.restore(s.bodies);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(file, "(file)", fmt::format("the bodies' state does not fit this case: {}", e.what()));
-    }
-  }
-}
-
 }  // namespace
 
 ResolvedCase resolve_case(const Case& c) {
@@ -117,10 +103,23 @@ ResolvedCase resolve_case(const Case& c) {
   resolve_step_bodies(c, r.model);
   if (!c.start.empty()) {
     r.start = read_state_file(c.start_state);
-    resolve_start(c, r.model, bodies ? &*bodies : nullptr, *r.start);
+    check_start_state(c, r.model, *r.start, c.start_state);
   }
   resolve_fabric_steps(c, r.model, r.start);
   return r;
+}
+
+void check_start_state(const Case& c, const Model& model, const SolverState& s, const std::string& file) {
+  std::optional<BodySystem> bodies;
+  if (!model.bodies.empty()) bodies.emplace(c, model);
+  check_state_fits(s, model, bodies ? bodies->num_bindings() : 0, file);
+  if (bodies) {
+    try {
+      bodies->restore(s.bodies);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(file, "(file)", fmt::format("the bodies' state does not fit this case: {}", e.what()));
+    }
+  }
 }
 
 }  // namespace fibra

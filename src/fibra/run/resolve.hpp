@@ -6,6 +6,7 @@
 /// shear step's conditions, say, once the weaving is done). The solver takes a resolved case
 /// and raises no input error.
 #include <optional>
+#include <string>
 
 #include "fibra/model/case.hpp"
 #include "fibra/model/model.hpp"
@@ -22,5 +23,10 @@ struct ResolvedCase {
 /// Builds the model and checks every reference and condition of the case against it; throws
 /// InputError (file, key, what was expected) on the first that fails.
 ResolvedCase resolve_case(const Case& c);
+
+/// Checks that `state`, read from `file`, belongs to the model of `c` (check_state_fits, and
+/// the bodies' part restored into the case's body system); throws InputError naming `file`.
+/// resolve_case does it for a [start] state.
+void check_start_state(const Case& c, const Model& model, const SolverState& state, const std::string& file);
 
 }  // namespace fibra

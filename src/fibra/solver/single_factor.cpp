@@ -182,7 +182,8 @@ SingleFactor::Node SingleFactor::node(Index s) const {
 }
 
 void SingleFactor::forward(Index s, Index end_column, double* y, double* delta, double* t) const {
-  const auto [k1, nscol, nsrow, below, rows, l] = node(s);
+  const auto [k1, nscol, nsrow, node_below, rows, l] = node(s);
+  const Index below = node_below;  // a variable, not a binding: Clang 14 has none in OpenMP loops
   double* ys = y + k1;
   // The diagonal block's triangle by columns (column j packed from its diagonal down).
   for (Index j = 0; j < nscol; ++j) {
@@ -219,7 +220,8 @@ void SingleFactor::forward(Index s, Index end_column, double* y, double* delta, 
 }
 
 void SingleFactor::backward(Index s, double* y, double* t) const {
-  const auto [k1, nscol, nsrow, below, rows, l] = node(s);
+  const auto [k1, nscol, nsrow, node_below, rows, l] = node(s);
+  const Index below = node_below;  // a variable, not a binding: Clang 14 has none in OpenMP loops
   double* ys = y + k1;
   if (below > 0) {
     // The rows below gathered once; their dot products with the columns four at a time.

@@ -1,5 +1,6 @@
 #include "fibra/solver/solver_state.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -50,7 +51,11 @@ class Out {
 
 class In {
  public:
-  In(std::ifstream& s, const std::string& path) : m_s(s), m_path(path) {}
+  In(std::ifstream& s, const std::string& path) : m_s(s), m_path(path) {
+    m_s.seekg(0, std::ios::end);
+    m_size = static_cast<std::uint64_t>(std::max<std::streamoff>(m_s.tellg(), 0));
+    m_s.seekg(0, std::ios::beg);
+  }
   template <typename T>
   T get() {
     static_assert(std::is_arithmetic_v<T>);
@@ -58,14 +63,20 @@ class In {
     read(&v, sizeof(T));
     return v;
   }
-  // A count, bounded so that a corrupt file fails with a message rather than a huge allocation.
-  std::uint64_t count(std::uint64_t limit) {
+  // A count of items of at least `bytes` bytes each, bounded by `limit` and by what is left of
+  // the file, so that a corrupt or truncated file fails with a message before anything of
+  // that size is allocated.
+  std::uint64_t count(std::uint64_t limit, std::uint64_t bytes) {
     const auto n = get<std::uint64_t>();
     if (n > limit) bad(fmt::format("a count of {} (at most {} expected): the file is corrupt", n, limit));
+    const std::uint64_t left = m_size - std::min<std::uint64_t>(m_size, static_cast<std::uint64_t>(m_s.tellg()));
+    if (n > left / bytes)
+      bad(fmt::format("the file ends early: {} items of {} bytes announced, {} bytes left (truncated or corrupt)", n,
+                      bytes, left));
     return n;
   }
   std::string text() {
-    std::string v(count(1u << 20), '\0');
+    std::string v(count(1u << 20, 1), '\0');
     read(v.data(), v.size());
     return v;
   }
@@ -75,12 +86,12 @@ class In {
     return v;
   }
   VecX vecx(std::uint64_t limit) {
-    VecX v(static_cast<Index>(count(limit)));
+    VecX v(static_cast<Index>(count(limit, sizeof(double))));
     read(v.data(), static_cast<size_t>(v.size()) * sizeof(double));
     return v;
   }
   std::vector<double> doubles(std::uint64_t limit) {
-    std::vector<double> v(count(limit));
+    std::vector<double> v(count(limit, sizeof(double)));
     read(v.data(), v.size() * sizeof(double));
     return v;
   }
@@ -93,6 +104,7 @@ class In {
  private:
   std::ifstream& m_s;
   std::string m_path;
+  std::uint64_t m_size = 0;  // the file's size [bytes]
 };
 
 void put_particle(Out& o, const Particle& p) {
@@ -189,7 +201,9 @@ SolverState read_state_file(const std::string& path) {
   s.steps_done = in.get<std::int32_t>();
   s.q = in.vecx(dofs);
   s.bodies = in.doubles(std::uint64_t{1} << 40);
-  const std::uint64_t n = in.count(std::uint64_t{1} << 40);
+  // Bytes per item as written: two particles (8 + 3 * 8), the normal, stiffness,
+  // regularization, zone, two flags, offset, friction normal and two vectors.
+  const std::uint64_t n = in.count(std::uint64_t{1} << 40, 2 * 32 + 24 + 16 + 4 + 2 + 16 + 48);
   s.contacts.resize(n);
   for (ContactElement& c : s.contacts) {
     c.a = get_particle(in);
@@ -208,13 +222,13 @@ SolverState read_state_file(const std::string& path) {
     c.separation_previous = in.vec3();
   }
   s.force_end = in.vecx(dofs);
-  const std::uint64_t moments = in.count(dofs);
+  const std::uint64_t moments = in.count(dofs, 8 + 2 * 24);
   for (std::uint64_t k = 0; k < moments; ++k) {
     const auto node = in.get<std::int64_t>();
     const Vec3 a = in.vec3(), b = in.vec3();
     s.moments[node] = {a, b};
   }
-  const std::uint64_t disp = in.count(dofs);
+  const std::uint64_t disp = in.count(dofs, 8 + 2 * 8);
   for (std::uint64_t k = 0; k < disp; ++k) {
     const auto dof = in.get<std::int64_t>();
     const double a = in.get<double>(), b = in.get<double>();

@@ -1,0 +1,49 @@
+// libFuzzer harness: a state file (read_state_file, solver/solver_state.hpp), then, when it is
+// read, its check against the woven sample's model and its restoring into a solver of it
+// (check_start_state, StaticSolver::restore_state, as a run with [start] does). Any input either is restored or gives an InputError; any other exception,
+// a crash, a sanitizer report, a leak or a hang is a finding (docs/sanitizers.md). The seeds are
+// the state files of runs of examples/woven_sample and examples/crossed_fibers.
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "fibra/core/error.hpp"
+#include "fibra/io/case_reader.hpp"
+#include "fibra/model/model.hpp"
+#include "fibra/run/resolve.hpp"
+#include "fibra/solver/solver_state.hpp"
+#include "fibra/solver/static_solver.hpp"
+#include "fuzz_input_file.hpp"
+
+namespace {
+
+struct Target {
+  fibra::Case c = fibra::read_case(FIBRA_SOURCE_DIR "/examples/woven_sample/woven_sample.toml");
+  fibra::Model model = fibra::build_model(c);
+  fibra::StaticSolver solver{c, model};
+};
+
+Target& target() {
+  static Target t;
+  return t;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  target();
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string& path = fibra::fuzz::write_input(data, size, ".bin");
+  try {
+    const fibra::SolverState state = fibra::read_state_file(path);
+    fibra::check_start_state(target().c, target().model, state, path);
+    target().solver.restore_state(state);
+  } catch (const fibra::InputError&) {
+    // the expected answer to bad input
+  }
+  return 0;
+}

@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# Runs each libFuzzer harness of fuzz/ (docs/sanitizers.md) for FIBRA_FUZZ_SECONDS seconds (60 by
+# default), one after the other, from its seeds: the case readers from every case file of the
+# repository (the JSON harness from their conversion to JSON), the state reader from
+# fuzz/seeds/state, the nodes.csv reader from fuzz/seeds/nodes_csv and tests/malformed/nodes.csv.
+# A crash, an exception other than InputError, a sanitizer report, a leak, an input that takes
+# more than 10 s or 2 GiB is a finding: the harness stops, its input is kept in
+# build-asan/fuzz-runs/<harness>/ (crash-*, leak-*, timeout-*, oom-*) and this script fails.
+#   bash scripts/fuzz.sh [HARNESS...]     (fuzz_case_toml fuzz_case_json fuzz_state fuzz_nodes_csv)
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="${FIBRA_ASAN_DIR:-$root/build-asan}"
+seconds="${FIBRA_FUZZ_SECONDS:-60}"
+harnesses=("$@")
+((${#harnesses[@]})) || harnesses=(fuzz_case_toml fuzz_case_json fuzz_state fuzz_nodes_csv)
+# FIBRA_FUZZ_NO_BUILD=1: run the harnesses as built (while build-asan/ builds something else).
+[ -n "${FIBRA_FUZZ_NO_BUILD:-}" ] || bash "$root/scripts/asan_build.sh" "${harnesses[@]}"
+# shellcheck disable=SC1091
+source "$build/sanitizer_env.sh"
+export ASAN_SYMBOLIZER_PATH=/usr/bin/llvm-symbolizer-14
+
+case_files() {
+  find "$root/examples" "$root/tests/robustness/cases" "$root/tests/malformed" "$root/bench" \
+    -type f -name "*.$1" | sort
+}
+
+# Seeds of a harness into the directory $2 (emptied first).
+seed() {
+  rm -rf "$2" && mkdir -p "$2"
+  case "$1" in
+    fuzz_case_toml) case_files toml | while read -r f; do cp "$f" "$2/$(echo "$f" | md5sum | cut -c1-16).toml"; done ;;
+    fuzz_case_json)
+      case_files json | while read -r f; do cp "$f" "$2/$(echo "$f" | md5sum | cut -c1-16).json"; done
+      # The TOML cases converted (those that TOML reads; dates, which JSON lacks, as text).
+      case_files toml | python3 -c '
+import hashlib, json, sys, tomllib
+for path in sys.stdin.read().split():
+    try:
+        data = tomllib.load(open(path, "rb"))
+    except Exception:  # not TOML (the malformed corpus), or nested too deep for Python
+        continue
+    name = hashlib.md5(path.encode()).hexdigest()[:16]
+    with open(sys.argv[1] + "/" + name + "-from-toml.json", "w") as out:
+        json.dump(data, out, indent=1, default=str)
+' "$2" ;;
+    fuzz_state) cp "$root"/fuzz/seeds/state/* "$2/" ;;
+    fuzz_nodes_csv) cp "$root"/fuzz/seeds/nodes_csv/* "$2/" && cp "$root/tests/malformed/nodes.csv" "$2/malformed.csv" ;;
+    *) echo "fuzz.sh: unknown harness $1" >&2; exit 2 ;;
+  esac
+}
+
+failed=0
+for h in "${harnesses[@]}"; do
+  work="$build/fuzz-runs/$h"
+  seed "$h" "$work/corpus"
+  dict=()
+  case "$h" in fuzz_case_toml | fuzz_case_json) dict=(-dict="$root/fuzz/case.dict") ;; esac
+  echo "fuzz.sh: $h for $seconds s from $(ls "$work/corpus" | wc -l) seeds"
+  start=$(date +%s)
+  if "$build/fuzz/$h" "$work/corpus" "${dict[@]}" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+    -artifact_prefix="$work/" -print_final_stats=1 >"$work/log" 2>&1; then
+    status=ok
+  else
+    status=FAILED
+    failed=1
+  fi
+  stats=$(grep -E '^#[0-9]+[[:space:]]+DONE' "$work/log" | tail -1 || true)
+  execs=$(grep -E '^stat::number_of_executed_units' "$work/log" | awk '{print $2}' || true)
+  echo "fuzz.sh: $h: $status after $(($(date +%s) - start)) s, ${execs:-?} runs; ${stats:-no final stats}"
+  if [ "$status" = FAILED ]; then
+    tail -60 "$work/log"
+    ls "$work"/crash-* "$work"/leak-* "$work"/timeout-* "$work"/oom-* 2>/dev/null || true
+  fi
+done
+exit "$failed"
