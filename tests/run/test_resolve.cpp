@@ -59,6 +59,14 @@ TEST(Resolve, ShearWithItsHeightFreeNeedsAForceAcross) {
             "no error");
 }
 
+// The weaving pushes crossing tows apart through their contacts: a weave step without
+// [contact] is refused at its kind (the reader has checked its tows and pattern).
+TEST(Resolve, AWeaveStepNeedsContact) {
+  EXPECT_EQ(resolve_error(glass_fabric("plain", 2, 3, 5.0e-5, 1.25e-4, "", "[[step]]\nname = \"weave\"\nkind = \"weave\"\n"),
+                          "it needs [contact]"),
+            "step[0].kind");
+}
+
 const std::string kTwoFibers = R"(
 [[material]]
 name = "m"

@@ -25,9 +25,9 @@ void resolve_nodes(const Case& c, const Model& model) {
   }
 }
 
-/// Every body a step names exists, and no step loads a component that is prescribed (by this
-/// entry or since an earlier step): a prescribed component takes no load, its reaction is
-/// computed.
+/// No step loads a component that is prescribed (by this entry or since an earlier step): a
+/// prescribed component takes no load, its reaction is computed. (The reader checks the bodies'
+/// names.)
 void resolve_step_bodies(const Case& c, const Model& model) {
   std::vector<std::string> held(model.num_dofs());  // the step that prescribes the dof, or ""
   for (size_t s = 0; s < c.steps.size(); ++s)
@@ -35,7 +35,7 @@ void resolve_step_bodies(const Case& c, const Model& model) {
       const BodyStepSpec& bs = c.steps[s].bodies[i];
       const std::string key = fmt::format("step[{}].body[{}]", s, i);
       const int b = model.body_index(bs.name);
-      if (b < 0) throw InputError(c.file, key + ".name", fmt::format("no body named \"{}\"", bs.name));
+      if (b < 0) throw std::logic_error("resolve_case: a step's body not in the model (the reader checks it)");
       const Index d0 = model.bodies[b].first_dof;
       for (int k = 0; k < 3; ++k) {
         if (bs.has_displacement) held[d0 + k] = bs.displacement[k] ? c.steps[s].name : "";
@@ -57,37 +57,40 @@ void resolve_step_bodies(const Case& c, const Model& model) {
     }
 }
 
-/// The weave and test steps find what they drive: tows and a weave matrix with contact, the
-/// fabric's four edge bodies; a shear with its height free finds the force across its top edge
-/// that it keeps (the weft tension), from the state it starts from and the steps before it.
+/// A weave step pushes crossing tows apart through their contacts: it needs [contact] (the
+/// reader checks its tows and pattern, and the test steps' edge bodies). A shear with its
+/// height free keeps the force across its top edge (the weft tension): it finds one, from the
+/// state it starts from and the steps before it.
 void resolve_fabric_steps(const Case& c, const Model& model, const std::optional<SolverState>& start) {
-  for (size_t t = 0; t < c.tows.size(); ++t)
-    for (const std::string& name : c.tows[t].fibers)
-      if (model.fiber_index(name) < 0)
-        throw InputError(c.file, fmt::format("tow[{}].fibers", t), fmt::format("no fiber named \"{}\"", name));
   const int top = model.body_index(kEdgeBodies[3]);
   // The force along y on the top edge in force at the start of each step (the loads carry on
   // from step to step; an entry replaces them).
   double top_force = top >= 0 && start ? start->force_end[model.bodies[top].first_dof + 1] : 0.0;
   for (size_t s = 0; s < c.steps.size(); ++s) {
     const StepSpec& st = c.steps[s];
-    if (st.kind == StepSpec::Kind::Weave && (!c.contact.enabled || c.tows.empty() || c.weave.empty()))
+    if (st.kind == StepSpec::Kind::Weave && !c.contact.enabled)
       throw InputError(c.file, fmt::format("step[{}].kind", s),
-                       "a weave step needs [contact], tows ([[tow]] or [fabric]) and a weave matrix ([weave] or [fabric])");
-    if (st.is_test()) {
-      for (const char* edge : kEdgeBodies)
-        if (model.body_index(edge) < 0)
-          throw InputError(c.file, fmt::format("step[{}].kind", s),
-                           fmt::format("a {} step drives the fabric's edge bodies; there is no body \"{}\"",
-                                       StepSpec::kind_name(st.kind), edge));
-      if (st.kind == StepSpec::Kind::Shear && st.free_height && top_force == 0.0)
-        throw InputError(c.file, fmt::format("step[{}].height", s),
-                         "height = \"free\" leaves the top edge (edge.y+) under the force it had across the shear, "
-                         "and it has none: give the fabric a weft tension ([fabric] tension) or hold the height "
-                         "(\"held\")");
-    }
+                       "a weave step pushes crossing tows apart through their contacts: it needs [contact]");
+    if (st.kind == StepSpec::Kind::Shear && st.free_height && top_force == 0.0)
+      throw InputError(c.file, fmt::format("step[{}].height", s),
+                       "height = \"free\" leaves the top edge (edge.y+) under the force it had across the shear, "
+                       "and it has none: give the fabric a weft tension ([fabric] tension) or hold the height "
+                       "(\"held\")");
     for (const BodyStepSpec& bs : st.bodies)
       if (top >= 0 && bs.name == kEdgeBodies[3] && bs.force) top_force = (*bs.force)[1];
+  }
+}
+
+/// check_start_state with the case's body system (null without bodies).
+void check_start(const BodySystem* bodies, const Model& model, const SolverState& s, const std::string& file) {
+  check_state_fits(s, model, bodies ? bodies->num_bindings() : 0, file);
+  if (bodies) {
+    BodySystem copy = *bodies;
+    try {
+      copy.restore(s.bodies);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(file, "(file)", fmt::format("the bodies' state does not fit this case: {}", e.what()));
+    }
   }
 }
 
@@ -103,7 +106,7 @@ ResolvedCase resolve_case(const Case& c) {
   resolve_step_bodies(c, r.model);
   if (!c.start.empty()) {
     r.start = read_state_file(c.start_state);
-    check_start_state(c, r.model, *r.start, c.start_state);
+    check_start(bodies ? &*bodies : nullptr, r.model, *r.start, c.start_state);
   }
   resolve_fabric_steps(c, r.model, r.start);
   return r;
@@ -112,14 +115,7 @@ ResolvedCase resolve_case(const Case& c) {
 void check_start_state(const Case& c, const Model& model, const SolverState& s, const std::string& file) {
   std::optional<BodySystem> bodies;
   if (!model.bodies.empty()) bodies.emplace(c, model);
-  check_state_fits(s, model, bodies ? bodies->num_bindings() : 0, file);
-  if (bodies) {
-    try {
-      bodies->restore(s.bodies);
-    } catch (const std::invalid_argument& e) {
-      throw InputError(file, "(file)", fmt::format("the bodies' state does not fit this case: {}", e.what()));
-    }
-  }
+  check_start(bodies ? &*bodies : nullptr, model, s, file);
 }
 
 }  // namespace fibra

@@ -1,10 +1,12 @@
 #pragma once
-/// The resolution stage between a case and its solver. Everything a case file refers to is
-/// found here (nodes, fibers, bodies, bindings, the state a [start] goes on from) and every
-/// input error is raised here, before anything is computed: `fibra check` resolves a case and
-/// builds no solver, and a run that starts does not stop on an input error an hour later (a
-/// shear step's conditions, say, once the weaving is done). The solver takes a resolved case
-/// and raises no input error.
+/// The resolution stage between a case and its solver. The reader checks every name a case
+/// file gives (fibers, bodies, tows, steps); what it cannot check needs the model or the steps
+/// as a whole, and is resolved here, before anything is computed: the nodes references point
+/// to, the bindings against the geometry, loads on components prescribed since earlier steps,
+/// the test steps' conditions, and the state a [start] goes on from. `fibra check` resolves a
+/// case and builds no solver, and a run that starts does not stop on an input error an hour
+/// later (a shear step's conditions, say, once the weaving is done). The solver takes a
+/// resolved case and raises no input error.
 #include <optional>
 #include <string>
 

@@ -90,8 +90,6 @@ StaticSolver::StaticSolver(const Case& c, const Model& model)
   }
   for (size_t s = 0; s < c.steps.size(); ++s) {
     const StepSpec& st = c.steps[s];
-    for (size_t i = 0; i < st.loads.size(); ++i)
-      model.node_index(st.loads[i].node, c.file, fmt::format("step[{}].load[{}]", s, i));
     for (size_t i = 0; i < st.displacements.size(); ++i) {
       const NodeRef& ref = st.displacements[i].node;
       add_reaction(ref, model.node_index(ref, c.file, fmt::format("step[{}].displacement[{}]", s, i)));
@@ -1406,8 +1404,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         // from 8.8 to 4.4 N/m and failed there after 25 iterations).
         const double fall = m_relax_settling ? 1.0 : iterations <= 12 ? 0.25 : iterations <= 30 ? 0.5 : 1.0;
         m_relax_drag = std::max(std::max(fall * m_relax_drag, relax_min), std::min(failed_floor, relax_max));
-        const double tolerance = test ? st.tolerance : st.tolerance;
-        failed_floor *= m_relax_residual > 100.0 * tolerance ? fall : 0.7;
+        failed_floor *= m_relax_residual > 100.0 * st.tolerance ? fall : 0.7;
       }
       if (!relax && !weave_step && step_dl > 0.0) {
         last_motion = m_q - saved;
