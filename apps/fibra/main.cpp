@@ -65,12 +65,13 @@ void print_results(const std::string& out, const fibra::RunReport& r) {
   fmt::print("  also      history.csv, nodes.csv, summary.json, case.toml\n");
 }
 
-int run(const std::string& path, std::string out, int threads, bool progress_lines) {
+int run(const std::string& path, std::string out, int threads, bool progress_lines, bool resume) {
   const fibra::Case c = fibra::read_case(path);
   if (out.empty()) out = (std::filesystem::path("out") / c.name).string();
   fibra::RunOptions options;
   options.out_dir = out;
   options.threads = threads;
+  options.resume = resume;
   const bool tty = interactive();
   // On a terminal one progress line updated in place; with --progress one line per increment
   // (for logs of long runs).
@@ -326,6 +327,10 @@ int main(int argc, char** argv) {
   bool progress_lines = false;
   run_cmd->add_flag("--progress", progress_lines,
                     "print one line per converged increment on stderr (default: one line updated in place, on a terminal only)");
+  bool resume = false;
+  run_cmd->add_flag("--resume", resume,
+                    "go on from the checkpoint in the --out directory (state/checkpoint.bin) of a run that was stopped; "
+                    "the outputs are those of a run never stopped");
   auto* check_cmd = app.add_subcommand("check", "validate a case file without running it");
   check_cmd->add_option("case", case_path, "case file")->required();
   auto* generate_cmd = app.add_subcommand(
@@ -350,7 +355,7 @@ int main(int argc, char** argv) {
   plot_cmd->add_option("--out", out, "directory of the figures (default RESULT/plots for one result; required for several)");
   CLI11_PARSE(app, argc, argv);
   try {
-    if (*run_cmd) return run(case_path, out, threads, progress_lines);
+    if (*run_cmd) return run(case_path, out, threads, progress_lines, resume);
     if (*generate_cmd) return generate(case_path, out);
     if (*slice_cmd) return slice(result_dir, planes, out);
     if (*plot_cmd) return plot(plot_dirs, out);
