@@ -42,20 +42,6 @@ struct StaticSolver::Program {
 
 namespace {
 
-// The CG iterations preconditioned by an older factorization that a new one is worth: the
-// budget of a solve before it gives up, and of the solves since the last factorization beyond
-// the first one's iterations. Automatic (setting < 0): a factorization's flops over 16 times
-// its factor's nonzeros, between 20 and 100. A CG iteration's substitutions do about 4 flops
-// per factor nonzero at memory speed, the factorization its flops at BLAS-3 speed, some 4 times
-// faster per flop on these machines: a factorization of the 480-fiber woven samples (3.2e11
-// flop, 1.9e8 nonzeros) is worth ~100 iterations (docs/theory/solver.md, "Reusing the
-// factorization"); a small model's factor, cheap anyway, gets 20. From flop counts, not timings,
-// so that the solver's path is the same from run to run.
-int krylov_budget(int setting, double flops, double nonzeros) {
-  if (setting >= 0) return setting;
-  if (!(flops > 0.0 && nonzeros > 0.0)) return 20;
-  return static_cast<int>(std::clamp(std::round(flops / (16.0 * nonzeros)), 20.0, 100.0));
-}
 constexpr double kDirectorDrag = 100.0;  // weight of the section vectors' drag in weave and relax steps
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
