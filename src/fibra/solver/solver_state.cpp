@@ -113,6 +113,7 @@ class In {
   }
   void read(void* p, size_t n) {
     if (n > m_bytes.size() - m_at) bad("the file ends early (truncated: was its run stopped while writing it?)");
+    if (n == 0) return;  // (an empty vector's data() may be null, which memcpy may not take)
     std::memcpy(p, m_bytes.data() + m_at, n);
     m_at += n;
   }
