@@ -175,6 +175,20 @@ TEST_F(StateCounts, ACheckpointReadsBackWhole) {
   EXPECT_EQ(c.case_file, "case.toml");
 }
 
+// A state with empty lists (no bodies, contacts, moments nor prescribed dofs) reads back: in
+// the sanitized build, an empty list's copy took a null pointer (found by fuzz_state).
+TEST_F(StateCounts, EmptyListsReadBack) {
+  SolverState s = small_state();
+  s.bodies.clear();
+  s.contacts.clear();
+  s.moments.clear();
+  s.disp.clear();
+  write_state_file((m_dir / "empty.bin").string(), s);
+  const SolverState t = read_state_file((m_dir / "empty.bin").string());
+  EXPECT_TRUE(t.bodies.empty() && t.contacts.empty() && t.moments.empty() && t.disp.empty());
+  EXPECT_EQ(t.q, s.q);
+}
+
 TEST_F(StateCounts, TruncatedFlippedForeignAndLaterFilesAreNamed) {
   write_checkpoint_file((m_dir / "checkpoint.bin").string(), small_checkpoint());
   for (const bool checkpoint : {false, true}) {
