@@ -20,6 +20,7 @@
 #include "fibra/io/case_reader.hpp"
 #include "fibra/io/case_writer.hpp"
 #include "fibra/io/curve_plots.hpp"
+#include "fibra/io/nodes_csv.hpp"
 #include "fibra/io/output_writer.hpp"
 #include "fibra/io/result_curves.hpp"
 #include "fibra/io/slice.hpp"

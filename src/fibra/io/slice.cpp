@@ -3,17 +3,12 @@
 #include <fmt/format.h>
 #include <algorithm>
 #include <array>
-#include <cerrno>
-#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <map>
 #include <numbers>
 #include <optional>
-#include <sstream>
 #include <string_view>
 #include <unordered_map>
 
@@ -577,38 +572,6 @@ std::vector<std::uint8_t> make_png(const Layout& l, const std::vector<SliceCut>&
   return encode_png(r);
 }
 
-/// Splits one CSV line into fields (quoted fields: "..." with doubled quotes).
-bool split_csv(const std::string& line, std::vector<std::string>& fields) {
-  fields.clear();
-  std::string f;
-  size_t i = 0;
-  while (true) {
-    f.clear();
-    if (i < line.size() && line[i] == '"') {
-      ++i;
-      while (true) {
-        if (i >= line.size()) return false;  // unterminated quote
-        if (line[i] == '"') {
-          if (i + 1 < line.size() && line[i + 1] == '"') {
-            f += '"';
-            i += 2;
-            continue;
-          }
-          ++i;
-          break;
-        }
-        f += line[i++];
-      }
-      if (i < line.size() && line[i] != ',') return false;
-    } else {
-      while (i < line.size() && line[i] != ',') f += line[i++];
-    }
-    fields.push_back(f);
-    if (i >= line.size()) return true;
-    ++i;  // the comma
-  }
-}
-
 }  // namespace
 
 // ------------------------------------------------------------------------------------------
@@ -796,62 +759,6 @@ Eigen::AlignedBox3d centroid_bounds(const Model& model, const VecX& q) {
   Eigen::AlignedBox3d box;
   for (Index n = 0; n < model.num_nodes(); ++n) box.extend(Vec3(q.segment<3>(kNodeDofs * n)));
   return box;
-}
-
-VecX read_nodes_csv(const std::string& path, const Model& model) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "(file)", fmt::format("cannot open: {}", std::strerror(errno)));
-  static const std::string kHeader = "fiber,node,x,y,z,g1x,g1y,g1z,g2x,g2y,g2z";
-  static const char* const kColumns[kNodeDofs] = {"x", "y", "z", "g1x", "g1y", "g1z", "g2x", "g2y", "g2z"};
-  std::string line;
-  int number = 1;
-  if (!std::getline(in, line)) throw InputError(path, "line 1", "empty file: expected the header " + kHeader);
-  if (!line.empty() && line.back() == '\r') line.pop_back();
-  if (line != kHeader)
-    throw InputError(path, "line 1", fmt::format("expected the header \"{}\", got \"{}\"", kHeader, line));
-  VecX q = model.reference;
-  std::vector<char> seen(static_cast<size_t>(model.num_nodes()), 0);
-  std::vector<std::string> fields;
-  while (std::getline(in, line)) {
-    ++number;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty()) continue;
-    const std::string key = fmt::format("line {}", number);
-    if (!split_csv(line, fields) || fields.size() != 11)
-      throw InputError(path, key, fmt::format("expected 11 comma-separated fields ({}), got \"{}\"", kHeader, line));
-    const int f = model.fiber_index(fields[0]);
-    if (f < 0) throw InputError(path, key, fmt::format("no fiber named \"{}\" in the case", fields[0]));
-    const Fiber& fiber = model.fibers[f];
-    Index node = -1;
-    {
-      const std::string& s = fields[1];
-      const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), node);
-      if (ec != std::errc() || end != s.data() + s.size() || node < 0 || node >= fiber.num_nodes)
-        throw InputError(path, key,
-                         fmt::format("node must be an integer from 0 to {} (fiber \"{}\" has {} nodes), got \"{}\"",
-                                     fiber.num_nodes - 1, fiber.name, fiber.num_nodes, s));
-    }
-    const Index global = fiber.first_node + node;
-    if (seen[global]) throw InputError(path, key, fmt::format("node {} of fiber \"{}\" given twice", node, fiber.name));
-    seen[global] = 1;
-    for (int k = 0; k < kNodeDofs; ++k) {
-      const std::string& s = fields[2 + k];
-      double v = 0;
-      const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-      if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v))
-        throw InputError(path, key, fmt::format("column {}: expected a finite number, got \"{}\"", kColumns[k], s));
-      q[kNodeDofs * global + k] = v;
-    }
-  }
-  for (const Fiber& fiber : model.fibers) {
-    Index count = 0;
-    for (Index j = 0; j < fiber.num_nodes; ++j) count += seen[fiber.first_node + j];
-    if (count != fiber.num_nodes)
-      throw InputError(path, "(file)",
-                       fmt::format("fiber \"{}\" has {} of its {} nodes in the file (does it belong to this case?)",
-                                   fiber.name, count, fiber.num_nodes));
-  }
-  return q;
 }
 
 }  // namespace fibra

@@ -67,11 +67,4 @@ int write_slice(const std::string& stem, const Model& model, const VecX& q, cons
 /// Smallest box holding the centroid nodes x0 of all fibers at state q [m].
 Eigen::AlignedBox3d centroid_bounds(const Model& model, const VecX& q);
 
-/// Reads a nodes.csv written by OutputWriter::write_nodes for `model` (same fibers, same
-/// meshes) into a state: the node values from the file, the bodies' values from the model's
-/// reference (centres from the case, no rotation). Throws InputError (path, "line N" or
-/// "(file)") on a missing file, a wrong header, an unknown fiber or node, a bad number, a
-/// node given twice or missing.
-VecX read_nodes_csv(const std::string& path, const Model& model);
-
 }  // namespace fibra
