@@ -707,8 +707,35 @@ TEST_F(Cli, SliceInputErrors) {
   }
   EXPECT_FALSE(fs::exists(out / "slices"));
 
+  // --tow and --stations: an unknown tow (the case's are listed), a count that is not one, one
+  // without the other, both with --plane, neither.
+  Result r = fibra("slice out --tow C --stations 3");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--tow"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("no tow named \"C\"; the case's tows: A, B"), std::string::npos) << r.err;
+  for (const char* count : {"0", "-2", "abc", "2.5", "1000", "''"}) {
+    r = fibra(std::string("slice out --tow A --stations ") + count);
+    EXPECT_EQ(r.code, 2) << count << ": " << r.err;
+    EXPECT_NE(r.err.find("--stations"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("an integer from 1 to 999"), std::string::npos) << r.err;
+  }
+  r = fibra("slice out --tow A");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--stations"), std::string::npos) << r.err;
+  r = fibra("slice out --stations 3");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--stations"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--tow"), std::string::npos) << r.err;
+  r = fibra("slice out --tow A --stations 3 --plane x=0.5");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("either --plane or --tow"), std::string::npos) << r.err;
+  r = fibra("slice out");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--plane"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out / "slices"));
+
   // A plane that misses every fiber: where the fibers are.
-  Result r = fibra("slice out --plane x=0.5 --plane y=3");
+  r = fibra("slice out --plane x=0.5 --plane y=3");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("y=3"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("cuts no fiber"), std::string::npos) << r.err;
@@ -741,6 +768,102 @@ TEST_F(Cli, SliceInputErrors) {
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("nodes.csv: line 2"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("zz"), std::string::npos) << r.err;
+}
+
+// A woven and relaxed plain weave: the slices of a warp tow at four stations (the tow alone,
+// each fiber of it cut once, the planes evenly spaced), and a slice along that tow showing it
+// waving over and under the wefts it crosses.
+TEST_F(Cli, SliceOfAWovenRunShowsATowsStationsAndTheWeaveAlongIt) {
+  write("fabric.toml", test::plain_friction_sample());
+  ASSERT_EQ(fibra("run fabric.toml --out out").code, 0);
+  const fs::path out = m_dir / "out";
+  Result r = fibra("slice out --tow warp0 --stations 4");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("tow warp0: 4 stations"), std::string::npos) << r.out;
+  const Case c = read_case((out / "case.toml").string());
+  const Model model = build_model(c);
+  const VecX q = read_nodes_csv((out / "nodes.csv").string(), model);
+  int warp0 = -1;
+  for (size_t t = 0; t < c.tows.size(); ++t)
+    if (c.tows[t].name == "warp0") warp0 = static_cast<int>(t);
+  ASSERT_GE(warp0, 0);
+  const TowSpec& tow = c.tows[warp0];
+  ASSERT_EQ(tow.fibers.size(), 3u);
+  const TowStations st = tow_stations(model, q, tow, 4);
+  EXPECT_GT(st.direction.x(), 0.99);
+  int height = 0;
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_NEAR(st.planes[k].offset - st.start, (k + 1) * (st.end - st.start) / 5, 1e-12) << k;
+    // Every fiber of the tow cut once, as a crossing.
+    std::map<std::string, int> cut;
+    for (const SliceCut& s : slice_cuts(model, q, c.tows, st.planes[k]))
+      if (s.tow == warp0) {
+        EXPECT_EQ(s.kind, SliceCut::Kind::Crossing) << s.name;
+        ++cut[s.name];
+      }
+    for (const std::string& f : tow.fibers) EXPECT_EQ(cut[f], 1) << f << " at station " << k + 1;
+    // The files: the tow's three fibers only (warp0's colour, with the swatch), one page size.
+    const std::string stem = fmt::format("out/slices/tow_warp0_0{}", k + 1);
+    EXPECT_NE(r.out.find(stem + ".svg"), std::string::npos) << r.out;
+    const std::string svg = slurp(m_dir / (stem + ".svg"));
+    EXPECT_EQ(test::xml_error(svg), "") << stem;
+    const std::vector<test::Colour> fills = test::svg_path_fills(svg);
+    EXPECT_EQ(test::count_colour(fills, test::kSliceWarp[0]), 3 + 1) << stem;
+    for (const test::Colour& weft : test::kSliceWeft) EXPECT_EQ(test::count_colour(fills, weft), 0) << stem;
+    const test::PngImage png = test::read_png((m_dir / (stem + ".png")).string());
+    EXPECT_EQ(png.width, 1200) << png.error;
+    if (k == 0) height = png.height;
+    EXPECT_EQ(png.height, height) << "the stations share one frame";
+  }
+  EXPECT_FALSE(fs::exists(out / "slices" / "tow_warp0_05.svg"));
+  r = fibra("slice out --tow weft1 --stations 2 --out pics/w");
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* name : {"w_01.svg", "w_01.png", "w_02.svg", "w_02.png"})
+    EXPECT_TRUE(fs::is_regular_file(m_dir / "pics" / name)) << name;
+
+  // Along the tow: the plane y through its middle fiber cuts that fiber along its length as
+  // strips, the wefts across; the fiber runs above one weft and below the other.
+  const Fiber& middle = model.fibers[model.fiber_index(tow.fibers[1])];
+  double y = 0;
+  for (Index k = 0; k < middle.num_nodes; ++k) y += q[kNodeDofs * (middle.first_node + k) + 1];
+  y /= static_cast<double>(middle.num_nodes);
+  int strips = 0;
+  std::map<std::string, double> weft_z;  // the mean z of each weft's crossings
+  std::map<std::string, int> weft_n;
+  std::vector<const SliceCut*> along;
+  const std::vector<SliceCut> cuts = slice_cuts(model, q, c.tows, 1, y);
+  for (const SliceCut& s : cuts) {
+    if (s.tow == warp0 && s.kind == SliceCut::Kind::Strip) {
+      ++strips;
+      along.push_back(&s);
+    }
+    if (s.tow >= 0 && c.tows[s.tow].direction == TowSpec::Direction::Weft && s.kind == SliceCut::Kind::Crossing) {
+      weft_z[c.tows[s.tow].name] += s.center.y();
+      ++weft_n[c.tows[s.tow].name];
+    }
+  }
+  EXPECT_GT(strips, 0);
+  ASSERT_EQ(weft_n.size(), 2u) << "crossings of both wefts";
+  // The strips' height over each weft's crossings, read from the polygons: above one, below
+  // the other (a plain weave).
+  std::vector<double> sides;
+  for (const auto& [name, n] : weft_n) {
+    const double z = weft_z[name] / n;
+    double x = 0;
+    int m = 0;
+    for (const SliceCut& s : cuts)
+      if (s.tow >= 0 && c.tows[s.tow].name == name && s.kind == SliceCut::Kind::Crossing) x += s.center.x(), ++m;
+    x /= m;
+    double above = 0, below = 0;  // the strips' points within 0.05 mm of x, above and below z
+    for (const SliceCut* s : along)
+      for (const Eigen::Vector2d& p : s->points)
+        if (std::abs(p.x() - x) < 0.05e-3) (p.y() > z ? above : below) += 1;
+    ASSERT_GT(above + below, 0) << name;
+    sides.push_back(above > below ? 1.0 : -1.0);
+  }
+  EXPECT_EQ(sides[0] * sides[1], -1.0) << "the warp passes over one weft and under the other";
+  r = fibra(fmt::format("slice out --plane y={}", y));
+  ASSERT_EQ(r.code, 0) << r.err;
 }
 
 }  // namespace
