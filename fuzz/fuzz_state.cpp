@@ -1,4 +1,5 @@
-// libFuzzer harness: a state file (read_state_file, solver/solver_state.hpp), then, when it is
+// libFuzzer harness: a state file or checkpoint (read_state_file, read_checkpoint_file,
+// solver/solver_state.hpp), then, when a state is
 // read, its check against the woven sample's model and its restoring into a solver of it
 // (check_start_state, StaticSolver::restore_state, as a run with [start] does). Any input either is restored or gives an InputError; any other exception,
 // a crash, a sanitizer report, a leak or a hang is a finding (docs/sanitizers.md). The seeds are
@@ -37,13 +38,25 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const std::string& path = fibra::fuzz::write_input(data, size, ".bin");
-  try {
-    const fibra::SolverState state = fibra::read_state_file(path);
-    fibra::check_start_state(target().c, target().model, state, path);
-    target().solver.restore_state(state);
-  } catch (const fibra::InputError&) {
-    // the expected answer to bad input
+  // As given, then sealed (its length and checksum made to match, seal_state_bytes) so that
+  // the fields behind the checksum are fuzzed too; read as a step's state and as a checkpoint.
+  std::string bytes(reinterpret_cast<const char*>(data), size);
+  for (int sealed = 0; sealed < 2; ++sealed) {
+    if (sealed) fibra::seal_state_bytes(bytes);
+    const std::string& path =
+        fibra::fuzz::write_input(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size(), ".bin");
+    try {
+      const fibra::SolverState state = fibra::read_state_file(path);
+      fibra::check_start_state(target().c, target().model, state, path);
+      target().solver.restore_state(state);
+    } catch (const fibra::InputError&) {
+      // the expected answer to bad input
+    }
+    try {
+      const fibra::Checkpoint checkpoint = fibra::read_checkpoint_file(path);
+      fibra::check_start_state(target().c, target().model, checkpoint.state, path);
+    } catch (const fibra::InputError&) {
+    }
   }
   return 0;
 }

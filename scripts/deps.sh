@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages fibra needs (only those missing). Run as root.
-#   bash scripts/deps.sh            build, tests, benchmarks, plots
+#   bash scripts/deps.sh            build, tests, benchmarks, plots (meshio: the export's tests)
 #   bash scripts/deps.sh sanitize   also Clang with its sanitizer and libFuzzer run-times, its
 #                                   OpenMP and llvm-symbolizer (scripts/sanitize.sh, scripts/fuzz.sh)
 set -euo pipefail
@@ -8,9 +8,9 @@ packages=(
   build-essential cmake pkg-config git
   libeigen3-dev libsuitesparse-dev libopenblas-dev libmetis-dev
   libtomlplusplus-dev libcli11-dev libfmt-dev nlohmann-json3-dev
-  libcairo2-dev fonts-dejavu-core
+  zlib1g-dev libcairo2-dev fonts-dejavu-core
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3 python3-matplotlib
+  python3 python3-matplotlib python3-meshio
 )
 case "${1:-}" in
   "") ;;

@@ -1,6 +1,7 @@
 // fibra: command-line program. Parses arguments, validates the case, runs it, reports;
-// writes the generated assembly of a case (generate), slices of a run's result (slice) and
-// plots of the loading curves of one or several runs (plot).
+// writes the generated assembly of a case (generate), slices of a run's result (slice),
+// plots of the loading curves of one or several runs (plot) and the export of a run's woven
+// state to composite models (export).
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -18,6 +19,7 @@
 #include "fibra/body/bodies.hpp"
 #include "fibra/core/error.hpp"
 #include "fibra/core/heap.hpp"
+#include "fibra/export/export_result.hpp"
 #include "fibra/io/case_reader.hpp"
 #include "fibra/io/case_writer.hpp"
 #include "fibra/io/curve_plots.hpp"
@@ -67,12 +69,13 @@ void print_results(const std::string& out, const fibra::RunReport& r) {
   fmt::print("  also      history.csv, nodes.csv, summary.json, case.toml\n");
 }
 
-int run(const std::string& path, std::string out, int threads, bool progress_lines) {
+int run(const std::string& path, std::string out, int threads, bool progress_lines, bool resume) {
   const fibra::Case c = fibra::read_case(path);
   if (out.empty()) out = (std::filesystem::path("out") / c.name).string();
   fibra::RunOptions options;
   options.out_dir = out;
   options.threads = threads;
+  options.resume = resume;
   const bool tty = interactive();
   // On a terminal one progress line updated in place; with --progress one line per increment
   // (for logs of long runs).
@@ -377,6 +380,31 @@ int plot(const std::vector<std::string>& dirs, const std::string& out) {
   return 0;
 }
 
+/// The words given to the options of `fibra export` (each empty when absent).
+struct ExportWords {
+  std::string out;
+  std::vector<std::string> voxels, voxel_size, box, samples;
+};
+
+/// `fibra export`: tow envelopes, voxel model and Abaqus input of a run's final state.
+int export_state(const std::string& dir, const ExportWords& w) {
+  const fibra::ExportOptions options = fibra::parse_export_options(w.out, w.voxels, w.voxel_size, w.box, w.samples);
+  const fibra::ExportReport r = fibra::export_result(dir, options);
+  for (const std::string& note : r.notes) fmt::print("note: {}\n", note);
+  const fibra::VoxelGrid& g = r.grid;
+  fmt::print("{}: exported {} tows (contours moved inward by up to {:.3g} m where tows touch); {} x {} x {} voxels "
+             "of {:.4g} x {:.4g} x {:.4g} m, fiber volume fraction {:.4f}\n",
+             dir, r.tows, r.largest_inset, g.count[0], g.count[1], g.count[2], g.spacing.x(), g.spacing.y(),
+             g.spacing.z(), r.fiber_volume_fraction);
+  std::vector<std::string> shown;
+  size_t stl = 0;
+  for (const std::string& f : r.files)
+    if (f.ends_with(".stl")) ++stl;
+    else shown.push_back(f);
+  fmt::print("files in {}/: {}, envelopes/ ({} .stl)\n", options.out, fmt::join(shown, ", "), stl);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -410,6 +438,10 @@ int main(int argc, char** argv) {
   bool progress_lines = false;
   run_cmd->add_flag("--progress", progress_lines,
                     "print one line per converged increment on stderr (default: one line updated in place, on a terminal only)");
+  bool resume = false;
+  run_cmd->add_flag("--resume", resume,
+                    "go on from the checkpoint in the --out directory (state/checkpoint.bin) of a run that was stopped; "
+                    "the outputs are those of a run never stopped");
   auto* check_cmd = app.add_subcommand("check", "validate a case file without running it");
   check_cmd->add_option("case", case_path, "case file")->required();
   auto* generate_cmd = app.add_subcommand(
@@ -438,9 +470,26 @@ int main(int argc, char** argv) {
   plot_cmd->add_option("results", plot_dirs, "output directories of `fibra run` (hold summary.json and curves_*.csv)")
       ->required();
   plot_cmd->add_option("--out", out, "directory of the figures (default RESULT/plots for one result; required for several)");
+  ExportWords export_words;
+  auto* export_cmd = app.add_subcommand(
+      "export", "write a run's final state for composite models: tow envelopes (STL, VTP), a voxel model (VTI) "
+                "and an Abaqus input file (INP)");
+  export_cmd->add_option("result", result_dir, "output directory of `fibra run` (holds case.toml and nodes.csv)")
+      ->required();
+  export_cmd->add_option("--out", export_words.out, "directory of the exported files (required)");
+  export_cmd->add_option("--voxels", export_words.voxels, "voxels along x, y and z: NX NY NZ")->expected(1, 3);
+  export_cmd->add_option("--voxel-size", export_words.voxel_size, "voxel edge H in metres (instead of --voxels)")
+      ->expected(1);
+  export_cmd->add_option("--box", export_words.box,
+                         "the box to voxelize, XMIN YMIN ZMIN XMAX YMAX ZMAX in metres (default: the fibers' box)")
+      ->expected(1, 6);
+  export_cmd
+      ->add_option("--samples", export_words.samples,
+                   "K: K^3 points per voxel for the fiber volume fraction (default 4)")
+      ->expected(1);
   CLI11_PARSE(app, argc, argv);
   try {
-    if (*run_cmd) return run(case_path, out, threads, progress_lines);
+    if (*run_cmd) return run(case_path, out, threads, progress_lines, resume);
     if (*generate_cmd) return generate(case_path, out);
     if (*slice_cmd) {
       slice_request.has_tow = tow_option->count() > 0;
@@ -448,6 +497,7 @@ int main(int argc, char** argv) {
       return slice(result_dir, slice_request);
     }
     if (*plot_cmd) return plot(plot_dirs, out);
+    if (*export_cmd) return export_state(result_dir, export_words);
     return check(case_path);
   } catch (const fibra::InputError& e) {
     fmt::print(stderr, "error: {}\n", e.what());

@@ -212,6 +212,9 @@ inline void expect_same_case(const Case& a, const Case& b, bool compare_fabric =
   EXPECT_EQ(a.output.tube_sides, b.output.tube_sides);
   EXPECT_EQ(a.output.plots, b.output.plots);
   EXPECT_EQ(a.output.test_levels, b.output.test_levels);
+  EXPECT_EQ(a.output.checkpoint, b.output.checkpoint);
+  EXPECT_EQ(a.output.checkpoint_increments, b.output.checkpoint_increments);
+  EXPECT_EQ(a.output.checkpoint_seconds, b.output.checkpoint_seconds);
 
   if (!compare_fabric) return;
   ASSERT_EQ(a.fabric.has_value(), b.fabric.has_value());

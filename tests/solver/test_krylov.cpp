@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <cmath>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -49,6 +50,19 @@ struct Chain {
     return a;
   }
 };
+
+// The CG budget a factorization is worth: a setting >= 0 as it is; automatic, its flops over 16
+// times its nonzeros, between 20 and 100 (the 480-fiber samples' factor: 3.2e11 flops, 1.9e8
+// nonzeros, 105 -> 100; a small model's: 20).
+TEST(Krylov, TheBudgetIsTheFactorsFlopsPerNonzeroClamped) {
+  EXPECT_EQ(krylov_budget(0, 3.2e11, 1.9e8), 0);
+  EXPECT_EQ(krylov_budget(40, 3.2e11, 1.9e8), 40);
+  EXPECT_EQ(krylov_budget(-1, 3.2e11, 1.9e8), 100);
+  EXPECT_EQ(krylov_budget(-1, 1.6e10, 2.0e7), 50);
+  EXPECT_EQ(krylov_budget(-1, 4.4e8, 3.0e6), 20);
+  EXPECT_EQ(krylov_budget(-1, 0.0, 0.0), 20);
+  EXPECT_EQ(krylov_budget(-1, std::nan(""), 1.0), 20);
+}
 
 TEST(Krylov, SymmetricMultiplyMatchesTheDenseProduct) {
   const Chain c;

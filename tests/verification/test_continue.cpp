@@ -250,7 +250,6 @@ TEST_F(Continue, StateFilesRefuseOtherModelsAndDamage) {
 // A test step's state keeps the drag that loaded its last level, and a run going on from it
 // loads its first level with at least that drag (not from relax_drag again: on the 480-fiber
 // biaxial test such a restart failed twice, some 10 minutes each, before it got back there).
-// A version-1 state file (without that drag) is still read, as 0.
 TEST_F(Continue, ATestGoesOnWithTheDragThatLoadedItsLastLevel) {
   ASSERT_TRUE(s_whole);
   const fs::path whole = s_dir / "whole";
@@ -282,32 +281,7 @@ TEST_F(Continue, ATestGoesOnWithTheDragThatLoadedItsLastLevel) {
   EXPECT_EQ(more[1].at("step"), "more");
   EXPECT_GE(std::stod(more[1].at("relax:drag")), pulled.test_drag * (1.0 - 1e-12));
 
-  // Version 1: the same file without the drag (8 bytes before the end mark) and its version
-  // number (after the 12-byte magic line) set to 1.
-  std::ifstream in(whole / "state" / "pull.bin", std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::string end_mark = "end of state\n";
-  ASSERT_GT(bytes.size(), 12 + 4 + 8 + end_mark.size());
-  ASSERT_EQ(bytes.substr(bytes.size() - end_mark.size()), end_mark);
-  bytes.erase(bytes.size() - end_mark.size() - 8, 8);
-  const std::uint32_t one = 1;
-  bytes.replace(12, 4, reinterpret_cast<const char*>(&one), 4);
-  const fs::path old = s_dir / "version1.bin";
-  std::ofstream(old, std::ios::binary) << bytes;
-  const SolverState v1 = read_state_file(old.string());
-  EXPECT_EQ(v1.test_drag, 0.0);
-  EXPECT_EQ(v1.q, pulled.q);
-  EXPECT_EQ(v1.disp, pulled.disp);
-  // Version 3 is refused by name.
-  const std::uint32_t three = 3;
-  bytes.replace(12, 4, reinterpret_cast<const char*>(&three), 4);
-  std::ofstream(old, std::ios::binary) << bytes;
-  try {
-    read_state_file(old.string());
-    ADD_FAILURE() << "a state file of a later version was read";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("version 3"), std::string::npos) << e.what();
-  }
+  // Older versions: tests/solver/test_solver_state.cpp, StateCounts.OlderVersionsAreRead.
 }
 
 // Test levels grow back after a cut. A 40-degree shear of the woven 2 x 2 sample asked in one

@@ -104,6 +104,12 @@ double ContactManager::arc_length(const Particle& p) const {
   return h * (static_cast<double>(p.element - f.first_element) + 0.5 * (p.eta + 1.0));
 }
 
+std::vector<std::vector<std::uint64_t>> ContactManager::detection_memory() const { return m_detector->memory(); }
+
+void ContactManager::set_detection_memory(const std::vector<std::vector<std::uint64_t>>& memory) {
+  m_detector->set_memory(memory);
+}
+
 std::vector<ContactElement> ContactManager::detect(const VecX& q, const VecX& q_start,
                                                    const std::vector<ContactElement>& previous) {
   Detection det = m_detector->detect(q);

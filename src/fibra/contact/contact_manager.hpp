@@ -91,6 +91,9 @@ class ContactManager {
   FrictionParams friction() const { return m_friction; }
   const ContactSpec& spec() const { return m_spec; }  ///< settings
   int zones() const { return m_zones; }               ///< zones of the last detection
+  /// The detector's memory of its last detection (ContactDetector::memory), and its restoring.
+  std::vector<std::vector<std::uint64_t>> detection_memory() const;
+  void set_detection_memory(const std::vector<std::vector<std::uint64_t>>& memory);
   double initial_stiffness() const { return m_initial_stiffness; }  ///< initial penalty [N/m]
 
  private:

@@ -8,6 +8,10 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
 
 #include "fibra/beam/beam_element.hpp"
 
@@ -266,6 +270,19 @@ ContactDetector::ContactDetector(const Model& model, DetectionParams params)
 }
 
 ContactDetector::~ContactDetector() = default;
+
+std::vector<std::vector<std::uint64_t>> ContactDetector::memory() const {
+  std::vector<std::vector<std::uint64_t>> out;
+  out.reserve(m_fiber_out.size());
+  for (const FiberOutput& f : m_fiber_out) out.push_back(f.end_keys);
+  return out;
+}
+
+void ContactDetector::set_memory(const std::vector<std::vector<std::uint64_t>>& memory) {
+  if (memory.size() != m_fiber_out.size())
+    throw std::invalid_argument(fmt::format("detection memory of {} fibers, {} expected", memory.size(), m_fiber_out.size()));
+  for (size_t f = 0; f < memory.size(); ++f) m_fiber_out[f].end_keys = memory[f];
+}
 
 Detection ContactDetector::detect(const VecX& q) {
   Detection out;

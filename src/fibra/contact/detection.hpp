@@ -62,6 +62,12 @@ class ContactDetector {
   void detect(const VecX& q, Detection& out);
 
   const BroadPhase& broad_phase() const { return m_broad; }   ///< the broad phase (last boxes and pairs)
+  /// What a detection remembers of the last one, per fiber: the zone ends given their own
+  /// element (an end keeps its element while the fibers stay pressed there). Saved in
+  /// checkpoints, so that a resumed run detects as the run that wrote them.
+  std::vector<std::vector<std::uint64_t>> memory() const;
+  /// Restores memory(); throws std::invalid_argument when it is not one list per fiber.
+  void set_memory(const std::vector<std::vector<std::uint64_t>>& memory);
   const DetectionParams& params() const { return m_params; }  ///< settings
 
  private:

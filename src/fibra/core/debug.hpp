@@ -19,4 +19,12 @@ inline bool debug_checkpoint() {
   return on;
 }
 
+/// FIBRA_DEBUG_KILL=N: the run kills itself (SIGKILL) once the outputs of its N-th converged
+/// increment are written, before its checkpoint: the tests of `fibra run --resume` stop runs
+/// at chosen increments with it. 0 when unset.
+inline int debug_kill_increment() {
+  static const int n = std::getenv("FIBRA_DEBUG_KILL") ? std::atoi(std::getenv("FIBRA_DEBUG_KILL")) : 0;
+  return n;
+}
+
 }  // namespace fibra

@@ -689,6 +689,7 @@ class Reader {
                                      const std::vector<FiberSpec>& fibers) const;
   SolverSpec read_solver(const Value& t, const std::string& path) const;
   OutputSpec read_output(const Value& t, const std::string& path) const;
+  void read_checkpoint(const Value& v, const std::string& key, OutputSpec& o) const;
   ContactSpec read_contact(const Value& t, const std::string& path) const;
 
   /// Refuses the model of a [fabric] (table `t` at `path`, read into `f`) when its estimated size
@@ -1799,14 +1800,41 @@ ContactSpec Reader::read_contact(const Value& t, const std::string& path) const 
   return c;
 }
 
+void Reader::read_checkpoint(const Value& v, const std::string& key, OutputSpec& o) const {
+  const std::string expected =
+      "expected \"auto\", \"never\", a number of increments (an integer >= 1) or a time such as \"30 s\", "
+      "\"10 min\" or \"1 h\"";
+  if (v.type == Value::Type::Integer) {
+    o.checkpoint = OutputSpec::Checkpoint::Increments;
+    o.checkpoint_increments = to_int(v, key, 1);
+    return;
+  }
+  if (v.type != Value::Type::String) fail(key, fmt::format("{}, got {}", expected, describe(v)), &v);
+  if (v.text == "auto" || v.text == "never") {
+    o.checkpoint = v.text == "auto" ? OutputSpec::Checkpoint::Auto : OutputSpec::Checkpoint::Never;
+    return;
+  }
+  // A time: a positive number and a unit.
+  std::istringstream in(v.text);
+  double t = 0.0;
+  std::string unit, rest;
+  in >> t >> unit >> rest;
+  const double scale = unit == "s" ? 1.0 : unit == "min" ? 60.0 : unit == "h" ? 3600.0 : 0.0;
+  if (!(t > 0.0 && std::isfinite(t)) || scale == 0.0 || !rest.empty())
+    fail(key, fmt::format("{}, got \"{}\"", expected, v.text), &v);
+  o.checkpoint = OutputSpec::Checkpoint::Seconds;
+  o.checkpoint_seconds = t * scale;
+}
+
 OutputSpec Reader::read_output(const Value& t, const std::string& path) const {
   expect_table(t, path);
-  check_keys(t, path, {"every", "tube_sides", "plots", "test_levels"});
+  check_keys(t, path, {"every", "tube_sides", "plots", "test_levels", "checkpoint"});
   OutputSpec o;
   if (const Value* v = find(t, "every")) o.every = to_int(*v, join(path, "every"), 1);
   if (const Value* v = find(t, "tube_sides")) o.tube_sides = to_int(*v, join(path, "tube_sides"), 3);
   if (const Value* v = find(t, "plots")) o.plots = to_bool(*v, join(path, "plots"));
   if (const Value* v = find(t, "test_levels")) o.test_levels = to_bool(*v, join(path, "test_levels"));
+  if (const Value* v = find(t, "checkpoint")) read_checkpoint(*v, join(path, "checkpoint"), o);
   return o;
 }
 
@@ -2164,6 +2192,49 @@ Case parse_case_json(const std::string& text, const std::string& file_label, con
     throw InputError(file_label, "(file)", "expected a JSON object at the top level");
   }
   return finish(builder.root(), file_label, true, limits);
+}
+
+namespace {
+
+// Every value of a document tree under its dotted key path (`step[2].strain`), as text.
+void flatten(const Value& v, const std::string& path, std::map<std::string, std::string>& out) {
+  switch (v.type) {
+    case Value::Type::Table:
+      if (v.keys.empty()) out[path] = "{}";
+      for (std::size_t i = 0; i < v.keys.size(); ++i)
+        flatten(v.items[i], path.empty() ? v.keys[i] : path + "." + v.keys[i], out);
+      break;
+    case Value::Type::Array:
+      if (v.items.empty()) out[path] = "[]";
+      for (std::size_t i = 0; i < v.items.size(); ++i) flatten(v.items[i], fmt::format("{}[{}]", path, i), out);
+      break;
+    case Value::Type::Boolean: out[path] = v.boolean ? "true" : "false"; break;
+    case Value::Type::Integer: out[path] = std::to_string(v.integer); break;
+    case Value::Type::Float: out[path] = fmt::format("{}", v.number); break;
+    case Value::Type::String: out[path] = "\"" + v.text + "\""; break;
+    case Value::Type::Null: out[path] = "null"; break;
+    case Value::Type::Other: out[path] = v.text; break;
+  }
+}
+
+}  // namespace
+
+std::map<std::string, std::string> case_file_keys(const std::string& text, bool json, const std::string& file_label) {
+  Value root;
+  if (json) {
+    JsonBuilder builder;
+    if (!nlohmann::json::sax_parse(text, &builder)) throw InputError(file_label, "(file)", "JSON syntax error");
+    root = builder.root();
+  } else {
+    try {
+      root = from_toml(toml::parse(text, std::string_view(file_label)));
+    } catch (const toml::parse_error& e) {
+      throw InputError(file_label, "(file)", fmt::format("TOML syntax error: {}", e.description()));
+    }
+  }
+  std::map<std::string, std::string> out;
+  flatten(root, "", out);
+  return out;
 }
 
 Case read_case(const std::string& path, const SizeLimits& limits) {

@@ -331,6 +331,12 @@ std::string write_case_toml(const Case& c) {
   out += fmt::format("tube_sides = {}\n", c.output.tube_sides);
   out += fmt::format("plots = {}\n", c.output.plots);
   out += fmt::format("test_levels = {}\n", c.output.test_levels);
+  switch (c.output.checkpoint) {
+    case OutputSpec::Checkpoint::Auto: out += "checkpoint = \"auto\"\n"; break;
+    case OutputSpec::Checkpoint::Never: out += "checkpoint = \"never\"\n"; break;
+    case OutputSpec::Checkpoint::Increments: out += fmt::format("checkpoint = {}\n", c.output.checkpoint_increments); break;
+    case OutputSpec::Checkpoint::Seconds: out += fmt::format("checkpoint = \"{} s\"\n", number(c.output.checkpoint_seconds)); break;
+  }
   if (out.front() == '\n') out.erase(0, 1);  // no title
   return out;
 }

@@ -355,6 +355,72 @@ OutputWriter::OutputWriter(std::string dir, const Model& model, std::vector<std:
     io_fail("cannot write", history, errno);
 }
 
+OutputWriter::OutputWriter(std::string dir, const Model& model, std::vector<std::string> extra_columns, int tube_sides,
+                           const nlohmann::json& resume)
+    : m_dir(std::move(dir)), m_model(model), m_extra_columns(std::move(extra_columns)), m_tube_sides(tube_sides) {
+  if (m_tube_sides < 3) throw RunError(fmt::format("output: tube_sides must be at least 3, got {}", m_tube_sides));
+  if (m_dir.empty()) m_dir = ".";
+  prepare_output_dir(m_dir, {"fibers", "lines"});
+  auto entries = [&resume](const char* key) {
+    PvdEntries out;
+    for (const nlohmann::json& e : resume.at(key)) out.emplace_back(e.at(0).get<double>(), e.at(1).get<int>());
+    return out;
+  };
+  m_vtu_files = entries("vtu");
+  m_contact_files = entries("contacts");
+  m_body_files = entries("bodies");
+  // history.csv back to its rows at the checkpoint: those a killed run wrote after it are
+  // written again.
+  const std::string history = path("history.csv");
+  const auto bytes = resume.at("history_bytes").get<std::uintmax_t>();
+  std::error_code ec;
+  const std::uintmax_t size = fs::file_size(history, ec);
+  if (ec || size < bytes)
+    throw InputError(history, "(file)",
+                     fmt::format("{} than at the checkpoint ({} bytes): the output directory was changed since; run "
+                                 "the case again without --resume",
+                                 ec ? "missing, or not readable: it must be as long as" : "shorter", bytes));
+  fs::resize_file(history, bytes, ec);
+  if (ec) io_fail("cannot cut back", history, ec.value());
+  errno = 0;
+  m_history.reset(std::fopen(history.c_str(), "ab"));
+  if (!m_history) io_fail("cannot open for writing", history, errno);
+  // Numbered files past the checkpoint's: written again, or not at all.
+  const int next = vtu_count();
+  for (const std::string& series : series_names()) {
+    const fs::path folder = fs::path(m_dir) / series;
+    for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+      const std::string name = it->path().filename().string();
+      std::smatch m;
+      static const std::regex numbered(R"((fibers|lines|contacts|bodies)_(\d{6})\.vtu(\.tmp)?)");
+      if (std::regex_match(name, m, numbered) && std::stoi(m[2].str()) >= next) {
+        std::error_code rm;
+        fs::remove(it->path(), rm);
+      }
+    }
+    ec.clear();
+  }
+  write_pvd("fibers.pvd", "fibers", m_vtu_files);
+  write_pvd("lines.pvd", "lines", m_vtu_files);
+  if (!m_contact_files.empty()) write_pvd("contacts.pvd", "contacts", m_contact_files);
+  if (!m_body_files.empty()) write_pvd("bodies.pvd", "bodies", m_body_files);
+}
+
+nlohmann::json OutputWriter::resume_point() const {
+  auto entries = [](const PvdEntries& files) {
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& [time, index] : files) out.push_back({time, index});
+    return out;
+  };
+  errno = 0;
+  const long bytes = std::ftell(m_history.get());
+  if (bytes < 0) io_fail("cannot tell the length of", path("history.csv"), errno);
+  return {{"history_bytes", bytes},
+          {"vtu", entries(m_vtu_files)},
+          {"contacts", entries(m_contact_files)},
+          {"bodies", entries(m_body_files)}};
+}
+
 OutputWriter::~OutputWriter() = default;
 
 std::string OutputWriter::path(const std::string& name) const { return (fs::path(m_dir) / name).string(); }

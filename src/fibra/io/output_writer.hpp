@@ -65,6 +65,14 @@ class OutputWriter {
   /// Creates `dir` (and parents) and checks it and its subfolders fibers/ and lines/
   /// (prepare_output_dir: InputError when one cannot be written), opens history.csv with header: step,step_index,increment,load_factor,iterations,residual,wall_time, then the `extra_columns` names (e.g. reaction:beam:first:x).
   OutputWriter(std::string dir, const Model& model, std::vector<std::string> extra_columns, int tube_sides);
+  /// Goes on writing into `dir` from `resume_point` (resume_point() of the writer of a run
+  /// resumed from its checkpoint): history.csv cut back to its rows then and appended to, the
+  /// collections listing the files written until then, later numbered files removed. Throws
+  /// InputError naming the file when history.csv is missing or shorter than it was then.
+  OutputWriter(std::string dir, const Model& model, std::vector<std::string> extra_columns, int tube_sides,
+               const nlohmann::json& resume_point);
+  /// Where the outputs are (history.csv's length, the collections' files), for a checkpoint.
+  nlohmann::json resume_point() const;
   /// Closes history.csv.
   ~OutputWriter();
   OutputWriter(const OutputWriter&) = delete;             ///< not copyable (owns a file)

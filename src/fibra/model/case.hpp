@@ -270,6 +270,14 @@ struct OutputSpec {
   bool test_levels = true;     ///< biaxial/shear steps with a drag: .vtu at each settled level only (not every increment)
   int tube_sides = 12;         ///< polygon sides of the tube view of each fiber
   bool plots = true;           ///< plots of the biaxial and shear steps' curves (plots/, needs matplotlib)
+  /// When a run writes its checkpoint (state/checkpoint.bin, `fibra run --resume`): "auto" after
+  /// each increment once its step has run a minute, as long as checkpoints take at most 2 % of
+  /// the run's time; every N increments; every T seconds; never. Every mode but never also
+  /// writes one at each step's end and when the run is interrupted.
+  enum class Checkpoint { Auto, Increments, Seconds, Never };
+  Checkpoint checkpoint = Checkpoint::Auto;
+  int checkpoint_increments = 1;    ///< Increments: every N converged increments
+  double checkpoint_seconds = 60;   ///< Seconds: every T seconds of wall time [s]
 };
 
 /// File name stem of a step's name (outputs named after a step: curves_<stem>.csv,

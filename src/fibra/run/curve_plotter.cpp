@@ -23,6 +23,17 @@ CurvePlotter::CurvePlotter(const Case& c, std::string dir) : m_case(c), m_dir(st
   }
 }
 
+CurvePlotter::CurvePlotter(const Case& c, std::string dir, const nlohmann::json& resume)
+    : m_case(c), m_dir(std::move(dir)) {
+  m_plotted = resume.at("plotted").get<std::vector<int>>();
+  m_files = resume.at("files").get<std::vector<std::string>>();
+  m_error = resume.at("error").get<std::string>();
+}
+
+nlohmann::json CurvePlotter::resume_point() const {
+  return {{"plotted", m_plotted}, {"files", m_files}, {"error", m_error}};
+}
+
 void CurvePlotter::plot(int step_index) {
   if (!m_case.output.plots || step_index < 0 || step_index >= static_cast<int>(m_case.steps.size())) return;
   if (std::find(m_plotted.begin(), m_plotted.end(), step_index) != m_plotted.end()) return;

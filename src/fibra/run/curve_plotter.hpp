@@ -19,6 +19,11 @@ class CurvePlotter {
   /// For the run of `c` into `dir`; removes what an earlier run left for the test steps of `c`
   /// (their curves_STEP.csv and plots/STEP.*), so no stale curve or figure passes for this run's.
   CurvePlotter(const Case& c, std::string dir);
+  /// For a run resumed into `dir` from `resume_point` (resume_point() then): the figures drawn
+  /// until then are kept.
+  CurvePlotter(const Case& c, std::string dir, const nlohmann::json& resume_point);
+  /// The steps drawn and the files, for a checkpoint.
+  nlohmann::json resume_point() const;
 
   /// Draws the figure of step `step_index` from DIR/curves_STEP.csv: once per step; nothing
   /// when the step has no curves, when [output] plots = false, or after a failure (one warning

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include <array>
+#include <csignal>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -18,6 +19,7 @@
 #include "fibra/core/debug.hpp"
 #include "fibra/core/error.hpp"
 #include "fibra/core/file.hpp"
+#include "fibra/io/case_reader.hpp"
 #include "fibra/io/case_writer.hpp"
 #include "fibra/io/output_writer.hpp"
 #include "fibra/io/slice.hpp"
@@ -44,6 +46,80 @@ std::vector<std::string> output_subdirs(const Case& c) {
   return dirs;
 }
 
+/// The case as its run read it: the file's text, or for a case made in code its TOML.
+std::pair<std::string, std::string> case_source(const Case& c) {
+  std::error_code ec;
+  const std::string ext = std::filesystem::path(c.file).extension().string();
+  if ((ext == ".toml" || ext == ".json") && std::filesystem::is_regular_file(c.file, ec)) {
+    std::ifstream in(c.file, std::ios::binary);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.good() || in.eof()) return {text, c.file};
+  }
+  return {write_case_toml(c), "case.toml"};
+}
+
+/// The key's step index when it is a step's (`step[2].strain` -> 2), else -1.
+int step_of_key(const std::string& key) {
+  if (key.rfind("step[", 0) != 0) return -1;
+  const size_t end = key.find(']');
+  return end == std::string::npos ? -1 : std::atoi(key.substr(5, end - 5).c_str());
+}
+
+/// Refuses a checkpoint whose case differs from `c` in anything but the steps after the one
+/// under way and the checkpoints' rate: the message lists what changed.
+void check_case_unchanged(const Case& c, const Checkpoint& ck, const std::string& checkpoint_file) {
+  const auto [text, file] = case_source(c);
+  if (text == ck.case_text) return;
+  auto is_json = [](const std::string& f) { return std::filesystem::path(f).extension() == ".json"; };
+  const auto before = case_file_keys(ck.case_text, is_json(ck.case_file), ck.case_file);
+  const auto now = case_file_keys(text, is_json(file), file);
+  std::vector<std::string> changes;
+  std::string first;
+  auto note = [&](const std::string& key, const std::string& what) {
+    if (step_of_key(key) > ck.progress.step || key == "output.checkpoint") return;
+    if (first.empty()) first = key;
+    if (changes.size() < 6) changes.push_back(fmt::format("`{}` {}", key, what));
+  };
+  for (const auto& [key, value] : before) {
+    const auto it = now.find(key);
+    if (it == now.end()) note(key, fmt::format("removed (was {})", value));
+    else if (it->second != value) note(key, fmt::format("was {}, is {}", value, it->second));
+  }
+  for (const auto& [key, value] : now)
+    if (!before.count(key)) note(key, fmt::format("added ({})", value));
+  if (first.empty()) return;
+  std::string list;
+  for (const std::string& ch : changes) list += (list.empty() ? "" : "; ") + ch;
+  throw InputError(c.file, first,
+                   fmt::format("the case changed since the checkpoint it would resume from ({}): {}. A resumed run "
+                               "goes on with the case it started with; only the steps after the one under way (step {}, "
+                               "\"{}\") may change. Undo the change, or run the case again without --resume",
+                               checkpoint_file, list, ck.progress.step + 1, ck.state.step));
+}
+
+/// The checkpoint a resumed run goes on from: OUT/state/checkpoint.bin, of this case.
+Checkpoint load_checkpoint(const Case& c, const std::string& out_dir) {
+  const std::string file = (std::filesystem::path(out_dir) / "state" / "checkpoint.bin").string();
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec)) {
+    std::string status;
+    try {
+      std::ifstream in(std::filesystem::path(out_dir) / "summary.json");
+      if (in) status = nlohmann::json::parse(in).value("status", "");
+    } catch (const std::exception&) {
+    }
+    throw InputError(out_dir, "--resume",
+                     status == "converged"
+                         ? fmt::format("the run in \"{}\" finished (summary.json: converged): nothing to resume", out_dir)
+                         : fmt::format("no checkpoint in \"{}\" (state/checkpoint.bin): its run wrote none, or is "
+                                       "not a run of fibra; run the case without --resume",
+                                       out_dir));
+  }
+  Checkpoint ck = read_checkpoint_file(file);
+  check_case_unchanged(c, ck, file);
+  return ck;
+}
+
 }  // namespace
 
 RunReport run_case(const Case& c, const RunOptions& options) {
@@ -58,14 +134,30 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                                    "give the run another --out directory",
                                    c.start));
   }
+  // --resume: the run goes on from the checkpoint in its output directory.
+  const std::optional<Checkpoint> resumed =
+      options.resume ? std::optional<Checkpoint>(load_checkpoint(c, options.out_dir)) : std::nullopt;
+  const std::string checkpoint_file = options.out_dir + "/state/checkpoint.bin";
   // An output directory that cannot be written stops the run before anything is computed.
   prepare_output_dir(options.out_dir, output_subdirs(c));
   const ResolvedCase resolved = resolve_case(c);
   const Model& model = resolved.model;
   StaticSolver solver(c, model);
   if (options.progress) solver.set_progress(options.progress);
-  // [start]: the run goes on from the state an earlier run saved at the end of its last step.
-  if (resolved.start) solver.restore_state(*resolved.start);
+  if (resumed) {
+    check_state_fits(resumed->state, model, solver.bodies() ? solver.bodies()->num_bindings() : 0, checkpoint_file);
+    const SolverProgress& p = resumed->progress;
+    if (p.step >= static_cast<int>(c.steps.size()) ||
+        (!p.detection_memory.empty() && p.detection_memory.size() != model.fibers.size()) ||
+        (p.factor.valid && p.factor.bodies.size() != (solver.bodies() ? solver.bodies()->snapshot().size() : 0)))
+      throw InputError(checkpoint_file, "(file)", "its progress does not match the case's model: the file is corrupt");
+    solver.resume(resumed->state, resumed->progress);
+  } else if (resolved.start) {
+    // [start]: the run goes on from the state an earlier run saved at the end of its last step.
+    solver.restore_state(*resolved.start);
+  }
+  // What a resumed run's bookkeeping starts from (run_point() of the run that wrote it).
+  const nlohmann::json point = resumed ? nlohmann::json::parse(resumed->run) : nlohmann::json{};
   const VecX initial = solver.state();
   std::vector<std::string> columns = solver.reaction_columns();
   const std::vector<std::string> contact_columns = {
@@ -84,13 +176,20 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   // Woven samples: the fabric report (model/fabric_report.hpp) per increment, O(nodes).
   const bool fabric = !c.tows.empty();
   if (fabric) columns.insert(columns.end(), {"fabric:warp_crimp", "fabric:weft_crimp", "fabric:thickness"});
-  OutputWriter writer(options.out_dir, model, columns, c.output.tube_sides);
+  const std::unique_ptr<OutputWriter> writer_ptr =
+      resumed ? std::make_unique<OutputWriter>(options.out_dir, model, columns, c.output.tube_sides, point.at("writer"))
+              : std::make_unique<OutputWriter>(options.out_dir, model, columns, c.output.tube_sides);
+  OutputWriter& writer = *writer_ptr;
   // The expanded case (a [fabric] as its fibers, bodies and tows): `fibra slice` and any later
   // look at the outputs rebuild the model from it.
   write_file_atomic(writer.dir() + "/case.toml", write_case_toml(c));
-  CurvePlotter plotter(c, writer.dir());
+  const std::unique_ptr<CurvePlotter> plotter_ptr = resumed
+                                                        ? std::make_unique<CurvePlotter>(c, writer.dir(), point.at("plots"))
+                                                        : std::make_unique<CurvePlotter>(c, writer.dir());
+  CurvePlotter& plotter = *plotter_ptr;
   std::vector<std::string> slice_files;  // relative to the output directory
   std::optional<FabricReport> last_fabric;
+  nlohmann::json last_fabric_json;  // to_json(*last_fabric), or a resumed run's
   std::string last_fabric_step;
   nlohmann::json fabric_steps = nlohmann::json::array();
   double time_fabric = 0.0;
@@ -125,6 +224,77 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     curves.flush();
   };
   nlohmann::json states = nlohmann::json::array();  // the state files written at step ends
+  // Checkpoints ([output] checkpoint): the latest converged increment's, kept to be written
+  // when the run is interrupted; the step's start and the last written one's wall times.
+  const auto [case_text, case_file] = case_source(c);
+  std::optional<Checkpoint> latest;
+  int written_checkpoint = -1;  // total increments of the last checkpoint written
+  double checkpoint_time = 0.0, last_checkpoint_wall = 0.0, step_started = 0.0, last_wall = 0.0;
+  int checkpoint_step = -1;
+  const double wall_offset = resumed ? resumed->progress.wall_time : 0.0;
+  auto vec3s_to_json = [](const std::array<Vec3, 4>& v) {
+    nlohmann::json a = nlohmann::json::array();
+    for (const Vec3& x : v) a.push_back({x.x(), x.y(), x.z()});
+    return a;
+  };
+  auto vec3s_from_json = [](const nlohmann::json& a) {
+    std::array<Vec3, 4> v{};
+    for (int e = 0; e < 4; ++e)
+      for (int k = 0; k < 3; ++k) {
+        const nlohmann::json& x = a.at(e).at(k);
+        v[e][k] = x.is_null() ? std::nan("") : x.get<double>();  // JSON writes NaN as null
+      }
+    return v;
+  };
+  // The bookkeeping a checkpoint holds, for the resumed run's outputs to go on as these do.
+  auto run_point = [&]() {
+    nlohmann::json r = {{"curves_step", curves_step},
+                        {"curves_bytes", curves.is_open() ? static_cast<std::int64_t>(curves.tellp()) : 0},
+                        {"start", vec3s_to_json(start)},
+                        {"centre", vec3s_to_json(centre)},
+                        {"force", vec3s_to_json(force)},
+                        {"curves_files", curves_files},
+                        {"slices", slice_files},
+                        {"fabric_steps", fabric_steps},
+                        {"fabric", last_fabric_json},
+                        {"fabric_step", last_fabric_step},
+                        {"states", states},
+                        {"checkpoint_step", checkpoint_step},
+                        {"step_started", step_started},
+                        {"last_wall", last_wall}};
+    return nlohmann::json{{"writer", writer.resume_point()}, {"plots", plotter.resume_point()}, {"run", r}};
+  };
+  if (resumed) {
+    const nlohmann::json& r = point.at("run");
+    curves_step = r.at("curves_step").get<int>();
+    start = vec3s_from_json(r.at("start"));
+    centre = vec3s_from_json(r.at("centre"));
+    force = vec3s_from_json(r.at("force"));
+    curves_files = r.at("curves_files");
+    slice_files = r.at("slices").get<std::vector<std::string>>();
+    fabric_steps = r.at("fabric_steps");
+    last_fabric_json = r.at("fabric");
+    last_fabric_step = r.at("fabric_step").get<std::string>();
+    states = r.at("states");
+    checkpoint_step = r.at("checkpoint_step").get<int>();
+    step_started = r.at("step_started").get<double>();
+    last_wall = r.at("last_wall").get<double>();
+    written_checkpoint = resumed->progress.total;
+    last_checkpoint_wall = wall_offset;
+    if (curves_step >= 0) {
+      // The curves of the step under way, back to their rows at the checkpoint.
+      const std::string name = writer.dir() + "/curves_" + step_file_stem(c.steps[curves_step].name) + ".csv";
+      const auto bytes = r.at("curves_bytes").get<std::uintmax_t>();
+      std::error_code ec;
+      if (std::filesystem::file_size(name, ec) < bytes || ec)
+        throw InputError(name, "(file)", fmt::format("shorter than at the checkpoint ({} bytes): the output directory "
+                                                     "was changed since; run the case again without --resume",
+                                                     bytes));
+      std::filesystem::resize_file(name, bytes, ec);
+      curves.open(name, std::ios::app);
+      if (ec || !curves) throw RunError(fmt::format("cannot open for writing '{}'", name));
+    }
+  }
   // summary.json exists from the run's start: "running", with the last converged increment,
   // rewritten after each one, so that a run killed by the system says how far it got (the
   // final summary replaces it when the run ends, whatever its status).
@@ -142,7 +312,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                                           {"total_increments", info->total_increments}}
                          : nlohmann::json{{"step", nullptr}, {"step_number", 0}, {"steps", c.steps.size()},
                                           {"increment", 0}, {"load_factor", 0.0}, {"total_increments", 0}};
-    j["wall_time"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    j["wall_time"] = wall_offset + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     j["states"] = states;
     writer.write_summary(j);
   };
@@ -208,6 +378,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                               {"max_penetration", num(rep->max_penetration)},
                               {"max_penetration_ratio", num(rep->max_penetration_ratio)}});
       last_fabric = rep;
+      last_fabric_json = to_json(*rep);
       last_fabric_step = info.step;
       if (kind == StepSpec::Kind::Weave || kind == StepSpec::Kind::Relax || st.is_test()) {
         // Default slices across the middle of the sample: x half-way between the two middle
@@ -268,6 +439,40 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     // The plots of a test step once its curves are complete (after its history is written).
     if (info.step_end && info.step_index == curves_step) plotter.plot(curves_step);
     running_summary(&info);
+    if (debug_kill_increment() == info.total_increments) std::raise(SIGKILL);  // tests of --resume
+    // The checkpoint ([output] checkpoint): kept in memory after every increment (written if
+    // the run is interrupted), written when due; always at a step's end.
+    if (info.step_index != checkpoint_step) {
+      checkpoint_step = info.step_index;
+      step_started = last_wall;
+    }
+    last_wall = info.wall_time;
+    if (c.output.checkpoint != OutputSpec::Checkpoint::Never) {
+      const auto tc = std::chrono::steady_clock::now();
+      const double wall = info.wall_time;
+      bool due = info.step_end;
+      switch (c.output.checkpoint) {
+        case OutputSpec::Checkpoint::Increments:
+          due = due || info.total_increments % c.output.checkpoint_increments == 0;
+          break;
+        case OutputSpec::Checkpoint::Seconds: due = due || wall - last_checkpoint_wall >= c.output.checkpoint_seconds; break;
+        case OutputSpec::Checkpoint::Auto:
+          // Steps longer than a minute, at no more than 2 % of the run's time.
+          due = due || (wall - step_started >= 60.0 && checkpoint_time <= 0.02 * wall);
+          break;
+        case OutputSpec::Checkpoint::Never: break;
+      }
+      latest = Checkpoint{solver.save_state(info.step, info.step_end ? info.step_index + 1 : info.step_index),
+                          solver.progress(), run_point().dump(), case_text, case_file};
+      if (due) {
+        std::error_code ec;
+        std::filesystem::create_directories(writer.dir() + "/state", ec);
+        write_checkpoint_file(checkpoint_file, *latest);
+        written_checkpoint = info.total_increments;
+        last_checkpoint_wall = wall;
+      }
+      checkpoint_time += std::chrono::duration<double>(std::chrono::steady_clock::now() - tc).count();
+    }
   };
   // A failed write (a full disk, a file in place of a subfolder) stops the run at the
   // increment it happened, named in the error; every file written before it is kept.
@@ -308,9 +513,19 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     initial_extra[n - 2] = rep.weft_crimp;
     initial_extra[n - 1] = rep.thickness;
   }
-  writer.write_increment(initial, HistoryRow{"initial", -1, 0, 0.0, 0, 0.0, 0.0, initial_extra}, 0.0, true,
-                         nullptr, bodies ? &initial_bodies : nullptr);
-  running_summary(nullptr);
+  if (!resumed) {
+    writer.write_increment(initial, HistoryRow{"initial", -1, 0, 0.0, 0, 0.0, 0.0, initial_extra}, 0.0, true,
+                           nullptr, bodies ? &initial_bodies : nullptr);
+    running_summary(nullptr);
+  } else {
+    IncrementInfo at;
+    at.step = resumed->state.step;
+    at.step_index = resumed->progress.step;
+    at.increment = resumed->progress.done;
+    at.load_factor = resumed->progress.lambda;
+    at.total_increments = resumed->progress.total;
+    running_summary(&at);
+  }
   RunReport report;
   try {
     report.result = solver.run(observer);
@@ -330,6 +545,15 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     }
     throw;
   }
+  // A finished run has nothing to resume; an interrupted one can go on from its last
+  // converged increment.
+  if (report.result.status == RunResult::Status::Converged) {
+    std::error_code ec;
+    std::filesystem::remove(checkpoint_file, ec);
+  } else if (report.result.status == RunResult::Status::Interrupted && latest &&
+             latest->progress.total > written_checkpoint) {
+    write_checkpoint_file(checkpoint_file, *latest);
+  }
   report.stats = solver.stats();
   report.final_state = solver.state();
   report.fibers = static_cast<Index>(model.fibers.size());
@@ -347,7 +571,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   report.plots_error = plotter.error();
   report.slices = slice_files;
   for (const nlohmann::json& e : states) report.states.push_back(e["file"].get<std::string>());
-  report.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  report.wall_time = wall_offset + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   const SolverStats& s = report.stats;
   nlohmann::json j;
@@ -375,11 +599,11 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                  {"elements", report.elements}, {"bodies", model.bodies.size()}, {"bindings", c.bindings.size()}};
   j["timings"] = {{"total", report.wall_time}, {"assembly", s.time_assembly},
                   {"factorization", s.time_factorization}, {"solve", s.time_solve}, {"output", time_output},
-                  {"plots", plotter.time()}};
+                  {"plots", plotter.time()}, {"checkpoints", checkpoint_time}};
   if (fabric) {
     j["timings"]["fabric_report"] = time_fabric;
-    if (last_fabric) {
-      j["fabric"] = to_json(*last_fabric);
+    if (!last_fabric_json.is_null()) {
+      j["fabric"] = last_fabric_json;
       j["fabric"]["step"] = last_fabric_step;
     } else {
       j["fabric"] = nullptr;
@@ -392,6 +616,10 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   }
   if (!c.start.empty()) j["start"] = {{"from", c.start}, {"step", c.start_step}, {"file", c.start_state}};
   j["states"] = states;
+  if (resumed)
+    j["resumed_from"] = {{"step", resumed->state.step},
+                         {"increment", resumed->progress.done},
+                         {"total_increments", resumed->progress.total}};
   j["solver"] = {{"linear_solver", c.solver.linear_solver},
                  {"ordering", c.solver.method.ordering},
                  {"threads", omp_get_max_threads()},

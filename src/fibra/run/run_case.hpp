@@ -15,6 +15,10 @@ namespace fibra {
 struct RunOptions {
   std::string out_dir;   ///< output directory (created)
   int threads = 0;       ///< OpenMP threads (0 = default)
+  /// Go on from the checkpoint in out_dir (state/checkpoint.bin) instead of starting afresh:
+  /// the outputs are those of a run never stopped. InputError when there is none, it is
+  /// damaged, or the case changed in more than the steps not yet started.
+  bool resume = false;
   std::function<void(const std::string&)> progress;  ///< one line per increment (may be empty)
 };
 

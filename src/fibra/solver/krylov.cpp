@@ -1,5 +1,8 @@
 #include "fibra/solver/krylov.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include <omp.h>
 
 #include <cmath>
@@ -93,6 +96,12 @@ PcgResult pcg(const BlockPattern& pattern, const std::vector<double>& values, do
     rz = rz_next;
   }
   return out;
+}
+
+int krylov_budget(int setting, double flops, double nonzeros) {
+  if (setting >= 0) return setting;
+  if (!(flops > 0.0 && nonzeros > 0.0)) return 20;
+  return static_cast<int>(std::clamp(std::round(flops / (16.0 * nonzeros)), 20.0, 100.0));
 }
 
 }  // namespace fibra

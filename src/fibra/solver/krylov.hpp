@@ -37,6 +37,17 @@ struct PcgWorkspace {
 /// (z = M^-1 r, M symmetric positive definite), starting from x = M^-1 b. Stops when
 /// |W (b - A x)| <= tolerance |W b| (W = diag(weight), the dofs' force scales) or after
 /// `max_iterations` further iterations; x holds the last iterate either way.
+/// The CG iterations preconditioned by an older factorization that a new one is worth: the
+/// budget of a solve before it gives up, and of the solves since the last factorization beyond
+/// the first one's iterations. Automatic (setting < 0): a factorization's flops over 16 times
+/// its factor's nonzeros, between 20 and 100. A CG iteration's substitutions do about 4 flops
+/// per factor nonzero at memory speed, the factorization its flops at BLAS-3 speed, some 4 times
+/// faster per flop on these machines: a factorization of the 480-fiber woven samples (3.2e11
+/// flop, 1.9e8 nonzeros) is worth ~100 iterations (docs/theory/solver.md, "Reusing the
+/// factorization"); a small model's factor, cheap anyway, gets 20. From flop counts, not timings,
+/// so that the solver's path is the same from run to run.
+int krylov_budget(int setting, double flops, double nonzeros);
+
 PcgResult pcg(const BlockPattern& pattern, const std::vector<double>& values, double shift, const VecX& b, VecX& x,
               const std::function<void(const VecX&, VecX&)>& precondition, const VecX& weight, double tolerance,
               int max_iterations, PcgWorkspace& ws);

@@ -1,9 +1,16 @@
 #pragma once
-/// The solver's state at the end of a step, saved as `state.bin` in a result directory so that
-/// a later run can go on from it (`[start] from = DIR`): weave a fabric once, test it many
-/// times. Everything the next step needs: nodal and body values, the bodies' committed frames
-/// and binding multipliers, the contact elements with their history, and the loads and
-/// prescribed values in force (docs/outputs.md, "state.bin").
+/// What a run saves so that another can go on from it. Two kinds of file, one format:
+///  * a step's state, `state/STEP.bin`, at the end of each step: a later run goes on from it
+///    (`[start] from = DIR`): weave a fabric once, test it many times. Everything the next step
+///    needs: nodal and body values, the bodies' committed frames and binding multipliers, the
+///    contact elements with their history, and the loads and prescribed values in force;
+///  * a checkpoint, `state/checkpoint.bin`, after converged increments within a step: the same
+///    state and where the run is in its step (load factor, increment size, the method's
+///    adaptive drags and counters, the factorization it may reuse), the run's own outputs
+///    bookkeeping and its case file, so that `fibra run --resume` goes on as if the run had
+///    never stopped (docs/outputs.md, "state.bin" and "Checkpoints").
+/// Both are versioned, carry their own length and a CRC-32 of their bytes: a truncated,
+/// damaged or foreign file is refused with a message naming it, never read as a wrong state.
 #include <cstdint>
 #include <map>
 #include <string>
@@ -11,6 +18,7 @@
 #include <vector>
 
 #include "fibra/contact/contact_element.hpp"
+#include "fibra/terms/load_term.hpp"
 #include "fibra/core/types.hpp"
 
 namespace fibra {
@@ -44,12 +52,94 @@ struct SolverState {
   double test_drag = 0.0;
 };
 
+/// Counters and timings of a run.
+struct SolverStats {
+  int increments = 0;
+  int iterations = 0;
+  int cuts = 0;
+  int factorizations = 0;
+  int regularized_factorizations = 0;  ///< factorizations attempted with a shift
+  int shifted_iterations = 0;     ///< Newton iterations solved with a shifted factor
+  int line_search_trials = 0;
+  int searched_solves = 0;        ///< Newton solves in which the line search turned on
+  int roundoff_convergences = 0;  ///< increments accepted at the round-off floor of the residual
+  int binding_updates = 0;        ///< augmented-Lagrangian multiplier updates
+  int limited_steps = 0;          ///< Newton steps scaled down to the step limit
+  int reused_factorizations = 0;  ///< Newton iterations solved by CG preconditioned with an earlier factor
+  int krylov_iterations = 0;      ///< conjugate-gradient iterations (all Newton solves)
+  double time_assembly = 0;
+  double time_factorization = 0;
+  double time_solve = 0;
+  double factor_nonzeros = 0;
+};
+
+/// The matrix a factorization was made of, to make it again: the state, the contact elements,
+/// friction, drag, moments, eliminated dofs and bodies it was assembled with, and its shift.
+/// The solver preconditions later Newton solves with its last factorization (of an earlier
+/// tangent); a run resumed from a checkpoint factorizes that same matrix again, so that its
+/// solves are those of the run that was never stopped.
+struct FactorSource {
+  bool valid = false;             ///< a factorization the next solves may reuse
+  VecX q;                         ///< the state it was assembled at
+  std::vector<double> bodies;     ///< BodySystem::snapshot() then
+  std::vector<ContactElement> contacts;
+  FrictionParams friction;
+  double drag = 0, director_weight = 1, axial_weight = 1;  ///< DragTerm::set's arguments
+  VecX drag_anchor;
+  std::vector<NodalMoment> moments;
+  std::vector<char> fixed;        ///< eliminated dofs
+  double shift = 0;               ///< the diagonal shift it was factorized with
+};
+
+/// Where a run is within its step, and the state of the method's rules (StaticSolver::run):
+/// what a checkpoint adds to a step's state.
+struct SolverProgress {
+  int step = 0;            ///< index of the step under way
+  int total = 0;           ///< converged increments of the run
+  double wall_time = 0;    ///< the run's wall time so far [s]
+  // The step's increment control.
+  double lambda = 0, dl = 0, last_dl = 0;
+  VecX last_motion;        ///< load steps: the last increment's motion (secant predictor)
+  int done = 0, attempts = 0, level_failures = 0;
+  bool level_settled = true, relaxed = false, uncuttable = false;
+  double failed_floor = 0, failed_first = -1, failed_dl = 0;
+  VecX failed_state;       ///< the last failed attempt's state (for a stall's diagnosis)
+  std::string failed_refusal;
+  VecX force_start;        ///< the step's loads at its start (force_end is the state's)
+  // The method's adaptive values.
+  double relax_drag = 0, weave_depth = -1, relax_residual = 0, load_residual = 0, last_shift = 0;
+  double reference_force = 0;
+  bool normals_settled = true, relax_settling = false, reuse_factor = false;
+  int krylov_budget = 20, cg_excess = 0, fresh_cg = -1, iteration_factor = 1;
+  SolverStats stats;
+  FactorSource factor;
+  /// The contact detector's memory of its last detection (ContactDetector::memory), per fiber;
+  /// empty without contact.
+  std::vector<std::vector<std::uint64_t>> detection_memory;
+};
+
+/// A checkpoint: the state, the progress, and what the run around the solver keeps.
+struct Checkpoint {
+  SolverState state;
+  SolverProgress progress;
+  std::string run;        ///< the run's outputs bookkeeping (run_case, JSON text)
+  std::string case_text;  ///< the case file as the run read it (an edited case is refused)
+  std::string case_file;  ///< its path then
+};
+
 /// Writes `state` to `path` (write_file_atomic: through a temporary file renamed into place;
 /// throws RunError).
 void write_state_file(const std::string& path, const SolverState& state);
-/// Reads a state file; throws InputError naming `path` if it is missing, truncated or not a
-/// state file of this version.
+/// Reads a step's state file (versions 1 to 3); throws InputError naming `path` if it is
+/// missing, truncated, damaged, a checkpoint, or not a state file of a version this fibra reads.
 SolverState read_state_file(const std::string& path);
+/// Writes a checkpoint to `path` atomically (throws RunError).
+void write_checkpoint_file(const std::string& path, const Checkpoint& checkpoint);
+/// Reads a checkpoint; throws InputError naming `path` as read_state_file does.
+Checkpoint read_checkpoint_file(const std::string& path);
+/// Sets the length and checksum fields of a version-3 file's bytes to match its contents (for
+/// tests and fuzzing that change a field and want the parser, not the checksum, to answer).
+void seal_state_bytes(std::string& bytes);
 /// Checks that `state` (read from `path`) belongs to `model` with `bindings` bindings: its
 /// fingerprint, its reference configuration, its prescribed dofs and moments; throws
 /// InputError naming `path` and what differs.

@@ -42,20 +42,6 @@ struct StaticSolver::Program {
 
 namespace {
 
-// The CG iterations preconditioned by an older factorization that a new one is worth: the
-// budget of a solve before it gives up, and of the solves since the last factorization beyond
-// the first one's iterations. Automatic (setting < 0): a factorization's flops over 16 times
-// its factor's nonzeros, between 20 and 100. A CG iteration's substitutions do about 4 flops
-// per factor nonzero at memory speed, the factorization its flops at BLAS-3 speed, some 4 times
-// faster per flop on these machines: a factorization of the 480-fiber woven samples (3.2e11
-// flop, 1.9e8 nonzeros) is worth ~100 iterations (docs/theory/solver.md, "Reusing the
-// factorization"); a small model's factor, cheap anyway, gets 20. From flop counts, not timings,
-// so that the solver's path is the same from run to run.
-int krylov_budget(int setting, double flops, double nonzeros) {
-  if (setting >= 0) return setting;
-  if (!(flops > 0.0 && nonzeros > 0.0)) return 20;
-  return static_cast<int>(std::clamp(std::round(flops / (16.0 * nonzeros)), 20.0, 100.0));
-}
 constexpr double kDirectorDrag = 100.0;  // weight of the section vectors' drag in weave and relax steps
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -788,6 +774,8 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       }
       // Only the factor of a (nearly) unshifted tangent preconditions later iterations.
       m_reuse_factor = shift <= 1e-10 * mean_diag;
+      if (m_reuse_factor) record_factor_source(shift);
+      else m_factor_source.valid = false;
       damped = !m_reuse_factor;
       t0 = std::chrono::steady_clock::now();
       m_linear->solve(m_rhs, dq);
@@ -1117,86 +1105,200 @@ void StaticSolver::restore_state(const SolverState& s) {
   m_test_drag = s.test_drag;
 }
 
-RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const VecX&)>& observer) {
-  const auto t_start = std::chrono::steady_clock::now();
-  RunResult result;
+void StaticSolver::begin_step(int step) {
   Program& p = *m_program;
+  const StepSpec& st = m_case.steps[step];
+  const size_t s = static_cast<size_t>(step);
+  // Start values: where the previous step ended. End values: listed entries replace.
+  p.force_start = p.force_end;
+  std::map<Index, Vec3> moment_end;
+  for (auto& [node, se] : p.moments) moment_end[node] = se.second;
+  std::map<Index, std::pair<Vec3, Vec3>> moments;
+  for (auto& [node, m] : moment_end) moments[node] = {m, m};
+  std::map<Index, Vec3> listed_force, listed_moment;
+  for (size_t i = 0; i < st.loads.size(); ++i) {
+    const Index node = m_model.node_index(st.loads[i].node, m_case.file, fmt::format("step[{}].load[{}]", s, i));
+    // Vec3 has no zero default: start each listed node explicitly at zero.
+    listed_force.try_emplace(node, Vec3::Zero()).first->second += st.loads[i].force;
+    listed_moment.try_emplace(node, Vec3::Zero()).first->second += st.loads[i].moment;
+  }
+  for (auto& [node, f] : listed_force) p.force_end.segment<3>(9 * node) = f;
+  for (auto& [node, m] : listed_moment) {
+    auto it = moments.find(node);
+    const Vec3 start = it == moments.end() ? Vec3::Zero() : it->second.first;
+    moments[node] = {start, m};
+  }
+  p.moments = moments;
+  std::map<Index, std::pair<double, double>> disp;
+  for (auto& [dof, se] : p.disp) disp[dof] = {se.second, se.second};
+  for (size_t i = 0; i < st.displacements.size(); ++i) {
+    const DisplacementSpec& ds = st.displacements[i];
+    const Index node = m_model.node_index(ds.node, m_case.file, fmt::format("step[{}].displacement[{}]", s, i));
+    for (int k = 0; k < 3; ++k) {
+      const Index dof = 9 * node + k;
+      if (!ds.value[k]) {
+        disp.erase(dof);
+        continue;
+      }
+      const double start = m_q[dof] - m_model.reference[dof];
+      disp[dof] = {start, *ds.value[k]};
+    }
+  }
+  for (size_t i = 0; i < st.bodies.size(); ++i) {
+    const BodyStepSpec& bs = st.bodies[i];
+    const int b = m_model.body_index(bs.name);
+    const Index d0 = m_model.bodies[b].first_dof;
+    for (int k = 0; k < 3; ++k) {
+      if (bs.has_displacement) {
+        if (bs.displacement[k])
+          disp[d0 + k] = {m_q[d0 + k] - m_model.reference[d0 + k], *bs.displacement[k]};
+        else
+          disp.erase(d0 + k);
+      }
+      if (bs.has_rotation) {
+        if (bs.rotation[k])
+          disp[d0 + 3 + k] = {m_bodies->rotation(b, m_q)[k], *bs.rotation[k]};
+        else
+          disp.erase(d0 + 3 + k);
+      }
+    }
+    if (bs.force) p.force_end.segment<3>(d0) = *bs.force;
+    if (bs.moment) p.force_end.segment<3>(d0 + 3) = *bs.moment;
+  }
+  if (st.is_test()) test_conditions(step, disp);
+  p.disp = disp;
+
+}
+
+void StaticSolver::record_factor_source(double shift) {
+  FactorSource& f = m_factor_source;
+  f.valid = true;
+  f.q = m_q;
+  f.bodies = m_bodies ? m_bodies->snapshot() : std::vector<double>{};
+  f.contacts = m_problem->contacts();
+  f.friction = m_problem->friction();
+  f.drag = m_problem->drag();
+  f.director_weight = m_problem->drag_director_weight();
+  f.axial_weight = m_problem->drag_axial_weight();
+  f.drag_anchor = m_problem->drag_anchor();
+  f.moments = m_problem->moments();
+  f.fixed = m_problem->fixed();
+  f.shift = shift;
+}
+
+void StaticSolver::refactorize(const FactorSource& f) {
+  // The problem as it is, put back after.
+  const std::vector<double> bodies = m_bodies ? m_bodies->snapshot() : std::vector<double>{};
+  const std::vector<ContactElement> contacts = m_problem->contacts();
+  const FrictionParams friction = m_problem->friction();
+  const double drag = m_problem->drag(), director = m_problem->drag_director_weight(),
+               axial = m_problem->drag_axial_weight();
+  const VecX anchor = m_problem->drag_anchor();
+  const std::vector<NodalMoment> moments = m_problem->moments();
+  const std::vector<char> fixed = m_problem->fixed();
+  auto set = [this](const std::vector<double>& b, const std::vector<ContactElement>& c, const FrictionParams& fr,
+                    double d, const VecX& a, double dw, double aw, const std::vector<NodalMoment>& m,
+                    const std::vector<char>& x) {
+    if (m_bodies) m_bodies->restore(b);
+    if (m_contact && m_problem->set_contacts(c, fr)) m_linear->analyze(m_problem->pattern());
+    m_problem->set_drag(d, a, dw, aw);
+    m_problem->moments() = m;
+    m_problem->fixed() = x;
+  };
+  set(f.bodies, f.contacts, f.friction, f.drag, f.drag_anchor, f.director_weight, f.axial_weight, f.moments, f.fixed);
+  m_problem->evaluate(f.q, nullptr, &m_hessian);
+  const bool ok = m_linear->factorize(m_hessian, f.shift) == FactorStatus::Ok;
+  set(bodies, contacts, friction, drag, anchor, director, axial, moments, fixed);
+  m_factor_source = f;
+  // It factorized before; should it not now, the next solve factorizes afresh.
+  if (!ok) {
+    m_reuse_factor = false;
+    m_factor_source.valid = false;
+  }
+}
+
+SolverProgress StaticSolver::progress() const {
+  SolverProgress p = m_run;
+  p.force_start = m_program->force_start;
+  p.relax_drag = m_relax_drag;
+  p.weave_depth = m_weave_depth;
+  p.relax_residual = m_relax_residual;
+  p.load_residual = m_load_residual;
+  p.last_shift = m_last_shift;
+  p.reference_force = m_reference_force;
+  p.normals_settled = m_normals_settled;
+  p.relax_settling = m_relax_settling;
+  p.reuse_factor = m_reuse_factor && m_linear->has_factor() && m_factor_source.valid;
+  p.krylov_budget = m_krylov_budget;
+  p.cg_excess = m_cg_excess;
+  p.fresh_cg = m_fresh_cg;
+  p.iteration_factor = m_iteration_factor;
+  p.stats = m_stats;
+  if (p.reuse_factor) p.factor = m_factor_source;
+  if (m_contact) p.detection_memory = m_contact->detection_memory();
+  return p;
+}
+
+void StaticSolver::resume(const SolverState& state, const SolverProgress& p) {
+  if (p.step < 0 || p.step >= static_cast<int>(m_case.steps.size()))
+    throw std::logic_error("StaticSolver::resume: a checkpoint of another case (resume_run checks it)");
+  restore_state(state);
+  m_run = p;
+  m_run.factor = FactorSource{};
+  m_program->force_start = p.force_start;
+  m_relax_drag = p.relax_drag;
+  m_weave_depth = p.weave_depth;
+  m_relax_residual = p.relax_residual;
+  m_load_residual = p.load_residual;
+  m_last_shift = p.last_shift;
+  m_reference_force = p.reference_force;
+  m_normals_settled = p.normals_settled;
+  m_relax_settling = p.relax_settling;
+  m_krylov_budget = p.krylov_budget;
+  m_cg_excess = p.cg_excess;
+  m_fresh_cg = p.fresh_cg;
+  m_iteration_factor = p.iteration_factor;
+  m_stats = p.stats;
+  m_reuse_factor = p.reuse_factor && p.factor.valid;
+  if (m_contact && !p.detection_memory.empty()) m_contact->set_detection_memory(p.detection_memory);
+  if (m_reuse_factor) refactorize(p.factor);
+  m_resumed = true;
+}
+
+RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const VecX&)>& observer) {
+  // A resumed run's wall time goes on from the checkpoint's.
+  const auto t_start = std::chrono::steady_clock::now() -
+                       std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                           std::chrono::duration<double>(m_resumed ? m_run.wall_time : 0.0));
+  RunResult result;
   const SolverSpec& opt = m_case.solver;
-  int total = 0;
-  for (size_t s = 0; s < m_case.steps.size(); ++s) {
+  int& total = m_run.total;
+  const size_t first_step = m_resumed ? static_cast<size_t>(m_run.step) : 0;
+  if (!m_resumed) total = 0;
+  for (size_t s = first_step; s < m_case.steps.size(); ++s) {
     const StepSpec& st = m_case.steps[s];
     const int step = static_cast<int>(s);
-    // Start values: where the previous step ended. End values: listed entries replace.
-    p.force_start = p.force_end;
-    std::map<Index, Vec3> moment_end;
-    for (auto& [node, se] : p.moments) moment_end[node] = se.second;
-    std::map<Index, std::pair<Vec3, Vec3>> moments;
-    for (auto& [node, m] : moment_end) moments[node] = {m, m};
-    std::map<Index, Vec3> listed_force, listed_moment;
-    for (size_t i = 0; i < st.loads.size(); ++i) {
-      const Index node = m_model.node_index(st.loads[i].node, m_case.file, fmt::format("step[{}].load[{}]", s, i));
-      // Vec3 has no zero default: start each listed node explicitly at zero.
-      listed_force.try_emplace(node, Vec3::Zero()).first->second += st.loads[i].force;
-      listed_moment.try_emplace(node, Vec3::Zero()).first->second += st.loads[i].moment;
+    // A resumed run goes on within its step as the checkpoint left it.
+    const bool resumed = m_resumed;
+    m_resumed = false;
+    m_run.step = step;
+    if (!resumed) {
+      begin_step(step);
+      m_weave_depth = -1.0;  // measured at the step's first detection
     }
-    for (auto& [node, f] : listed_force) p.force_end.segment<3>(9 * node) = f;
-    for (auto& [node, m] : listed_moment) {
-      auto it = moments.find(node);
-      const Vec3 start = it == moments.end() ? Vec3::Zero() : it->second.first;
-      moments[node] = {start, m};
-    }
-    p.moments = moments;
-    std::map<Index, std::pair<double, double>> disp;
-    for (auto& [dof, se] : p.disp) disp[dof] = {se.second, se.second};
-    for (size_t i = 0; i < st.displacements.size(); ++i) {
-      const DisplacementSpec& ds = st.displacements[i];
-      const Index node = m_model.node_index(ds.node, m_case.file, fmt::format("step[{}].displacement[{}]", s, i));
-      for (int k = 0; k < 3; ++k) {
-        const Index dof = 9 * node + k;
-        if (!ds.value[k]) {
-          disp.erase(dof);
-          continue;
-        }
-        const double start = m_q[dof] - m_model.reference[dof];
-        disp[dof] = {start, *ds.value[k]};
-      }
-    }
-    for (size_t i = 0; i < st.bodies.size(); ++i) {
-      const BodyStepSpec& bs = st.bodies[i];
-      const int b = m_model.body_index(bs.name);
-      const Index d0 = m_model.bodies[b].first_dof;
-      for (int k = 0; k < 3; ++k) {
-        if (bs.has_displacement) {
-          if (bs.displacement[k])
-            disp[d0 + k] = {m_q[d0 + k] - m_model.reference[d0 + k], *bs.displacement[k]};
-          else
-            disp.erase(d0 + k);
-        }
-        if (bs.has_rotation) {
-          if (bs.rotation[k])
-            disp[d0 + 3 + k] = {m_bodies->rotation(b, m_q)[k], *bs.rotation[k]};
-          else
-            disp.erase(d0 + 3 + k);
-        }
-      }
-      if (bs.force) p.force_end.segment<3>(d0) = *bs.force;
-      if (bs.moment) p.force_end.segment<3>(d0 + 3) = *bs.moment;
-    }
-    if (st.is_test()) test_conditions(step, disp);
-    p.disp = disp;
-
-    m_weave_depth = -1.0;  // measured at the step's first detection
     const double nominal = 1.0 / st.increments;
     const int max_increments = st.max_increments > 0 ? st.max_increments : 100 * st.increments;
     const bool weave_step = st.kind == StepSpec::Kind::Weave;
-    double lambda = 0.0, dl = nominal;
+    double& lambda = m_run.lambda;
+    double& dl = m_run.dl;
     // Load steps: the motion of the step's last converged increment and its size, for the next
     // increment's predictor (below). A body's rotation dofs are its rotation over the
     // increment (they restart from zero at each commit), so they scale like the rest.
-    VecX last_motion;
-    double last_dl = 0.0;
+    VecX& last_motion = m_run.last_motion;
+    double& last_dl = m_run.last_dl;
     auto t_increment = std::chrono::steady_clock::now();
-    int done = 0, attempts = 0;
+    int& done = m_run.done;
+    int& attempts = m_run.attempts;
     // Relax steps (with contact): every increment is a proximal-point step, a drag towards the
     // increment's start whose stiffness starts at the weave's drag, k0 (method.relax_drag: the
     // stiffest), is divided by 4 or 2 after an easy increment and quadrupled (up to k0) after a
@@ -1209,10 +1311,9 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     // and its normals settled: every point of their curves is an equilibrium without drag.
     const bool relax = st.is_proximal() && m_contact && opt.method.relax_drag > 0.0;
     const bool test = relax && st.is_test();
-    bool level_settled = true;  // stays true but in tests, where a level repeats until it settles
+    bool& level_settled = m_run.level_settled;  // stays true but in tests, where a level repeats until it settles
     const double k0 = m_contact ? m_contact->initial_stiffness() : 0.0;
     const double relax_max = std::max(opt.method.weave_drag, opt.method.relax_drag) * k0, relax_min = 1e-9 * k0;
-    m_relax_drag = relax ? opt.method.relax_drag * k0 : 0.0;
     // Twice the last drag that failed: the drag does not fall straight back to a level that
     // just failed (each failure costs a whole Newton solve; on the 480-fiber relax the drag went
     // 35 (failed), 141 (failed), 563, then 141 again). How fast the floor falls depends on how
@@ -1224,7 +1325,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     // states hardly change and a level that failed fails again (twice at 4.4 N/m in the
     // 480-fiber relax, with the fast floor): there the floor decays by 0.7 per increment
     // (docs/performance.md, "The relax drag and its floor").
-    double failed_floor = 0.0;
+    double& failed_floor = m_run.failed_floor;
     // Tests: m_test_drag is the drag that applied the last load level (its first accepted
     // increment). A level's first increment moves the edges; at the low drag the previous level
     // settled with it failed twice on the 480-fiber biaxial test (at 288 and 1 152 N/m, about 10
@@ -1241,17 +1342,16 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     // taken 5 hours; docs/performance.md, "Test levels"). A level costs about as many settling
     // increments whatever its size, so small levels waste time; a level that fails costs one
     // Newton solve and a cut.
-    int level_failures = 0;
+    int& level_failures = m_run.level_failures;
     // The first residual and load step of the last failed attempt at the current load factor.
-    double failed_first = -1.0, failed_dl = 0.0;
+    double& failed_first = m_run.failed_first;
+    double& failed_dl = m_run.failed_dl;
     // Once a cut left the first residual unchanged, the load factor has nothing to cut until an
     // increment converges (cuts and retries no longer alternate on the same state).
-    bool uncuttable = false;
-    m_iteration_factor = 1;
-    m_relax_settling = false;
+    bool& uncuttable = m_run.uncuttable;
     // A failed run: the state at the last converged load factor, the attempt that failed.
-    VecX failed_state;           // the last state of the last failed attempt
-    std::string failed_refusal;  // why the contact loop refused it, if it did
+    VecX& failed_state = m_run.failed_state;             // the last state of the last failed attempt
+    std::string& failed_refusal = m_run.failed_refusal;  // why the contact loop refused it, if it did
     auto fail = [&](double attempted, const std::vector<double>& history, std::string message) {
       if (failed_state.size() == m_q.size()) {
         result.diagnosis = diagnose_stall(failed_state);
@@ -1265,7 +1365,26 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       result.message = std::move(message);
       return result;
     };
-    bool relaxed = !relax;
+    bool& relaxed = m_run.relaxed;
+    if (!resumed) {
+      lambda = 0.0;
+      dl = nominal;
+      last_motion.resize(0);
+      last_dl = 0.0;
+      done = attempts = 0;
+      level_settled = true;
+      m_relax_drag = relax ? opt.method.relax_drag * k0 : 0.0;
+      failed_floor = 0.0;
+      level_failures = 0;
+      failed_first = -1.0;
+      failed_dl = 0.0;
+      uncuttable = false;
+      m_iteration_factor = 1;
+      m_relax_settling = false;
+      failed_state.resize(0);
+      failed_refusal.clear();
+      relaxed = !relax;
+    }
     while (lambda < 1.0 - 1e-12 || !relaxed) {
       // A test level that would leave less than a quarter of itself for a last level takes it
       // along (every level costs its settling, however small).
@@ -1459,10 +1578,10 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       if (m_progress)
         m_progress(fmt::format("step {} \"{}\"  load {:6.4f}  iterations {:2d}  residual {:.2e}  {:7.2f} s", step + 1,
                                st.name, lambda, iterations, residual, info.wall_time));
-      observer(info, m_q);
-      t_increment = std::chrono::steady_clock::now();
       // Grow back towards the requested increment size: after an easy increment, or in tests
       // once a level has settled whose loading increment converged at the first attempt.
+      // (Before the observer: a checkpoint it writes holds the next increment's size.)
+      m_run.wall_time = info.wall_time;
       if (test) {
         if (level_settled) {
           if (level_failures == 0) dl = std::min(nominal, dl * 1.5);
@@ -1471,6 +1590,8 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       } else if (iterations <= 4) {
         dl = std::min(nominal, dl * 1.5);
       }
+      observer(info, m_q);
+      t_increment = std::chrono::steady_clock::now();
     }
   }
   m_stats.time_assembly = m_problem->times().assembly;

@@ -45,27 +45,6 @@ struct IncrementInfo {
   double drag = 0;                ///< drag stiffness per node the increment was solved with [N/m] (0 without drag)
 };
 
-/// Counters and timings of a run.
-struct SolverStats {
-  int increments = 0;
-  int iterations = 0;
-  int cuts = 0;
-  int factorizations = 0;
-  int regularized_factorizations = 0;  ///< factorizations attempted with a shift
-  int shifted_iterations = 0;     ///< Newton iterations solved with a shifted factor
-  int line_search_trials = 0;
-  int searched_solves = 0;        ///< Newton solves in which the line search turned on
-  int roundoff_convergences = 0;  ///< increments accepted at the round-off floor of the residual
-  int binding_updates = 0;        ///< augmented-Lagrangian multiplier updates
-  int limited_steps = 0;          ///< Newton steps scaled down to the step limit
-  int reused_factorizations = 0;  ///< Newton iterations solved by CG preconditioned with an earlier factor
-  int krylov_iterations = 0;      ///< conjugate-gradient iterations (all Newton solves)
-  double time_assembly = 0;
-  double time_factorization = 0;
-  double time_solve = 0;
-  double factor_nonzeros = 0;
-};
-
 /// Outcome of a run.
 struct RunResult {
   enum class Status { Converged, Failed, Interrupted } status = Status::Converged;
@@ -105,6 +84,15 @@ class StaticSolver {
   /// Starts the run from a saved state instead of the reference configuration (before run()):
   /// a state resolve_case has checked against this model (ResolvedCase::start).
   void restore_state(const SolverState& state);
+  /// The state after the last converged increment and where the run is in its step, for a
+  /// checkpoint (solver_state.hpp): call it from the observer. A run resumed from it
+  /// (resume()) goes on exactly as this one does.
+  SolverProgress progress() const;
+  /// Goes on from a checkpoint's state and progress instead of the reference configuration
+  /// (before run()): the step under way, its increment control, the method's adaptive values and
+  /// the factorization its next solves may reuse (made again from its record). The state is
+  /// one resolve_case has checked against this model.
+  void resume(const SolverState& state, const SolverProgress& progress);
   /// Progress callback (one line per increment); default none.
   void set_progress(std::function<void(const std::string&)> progress) { m_progress = std::move(progress); }
 
@@ -117,6 +105,8 @@ class StaticSolver {
   /// their fiber's tangent. A starting point for the level's Newton solve, not a result.
   void predict_test_level(int step, double lambda);
   struct Program;  // resolved loads and displacements per step
+  /// A step's loads and prescribed values (m_program) from the case and the current state.
+  void begin_step(int step);
   bool solve_increment(int step, double lambda, std::vector<double>& history, int& iterations, double& residual);
   bool newton(std::vector<double>& history, int& iterations, double& residual);
   /// Developers' trace of a shifted factorization (FIBRA_DEBUG_NEWTON): the indefinite local
@@ -145,6 +135,11 @@ class StaticSolver {
   /// the contact normals and frozen cones just updated: how far the update moved the forces.
   double normal_update_residual();
   void apply(int step, double lambda);
+  /// Records the matrix just factorized with `shift` (m_hessian at m_q with the problem as it
+  /// is), so that a checkpoint can make the factorization again.
+  void record_factor_source(double shift);
+  /// Factorizes again the matrix `source` records, the problem put back as it was after.
+  void refactorize(const FactorSource& source);
   std::vector<double> reactions(const VecX& gradient) const;
 
   const Case& m_case;
@@ -189,6 +184,9 @@ class StaticSolver {
   double m_load_residual = 0;    // tests: drag force at the end of the last level's loading increment (0: none yet)
   bool m_loading = false;        // tests: the increment being solved moves the edges (a level's first)
   int m_iteration_factor = 1;    // the current increment may take this many times max_iterations (1, 2 or 4)
+  SolverProgress m_run;          // where run() is: its step, the step's increment control (progress())
+  bool m_resumed = false;        // run() goes on from m_run (resume())
+  FactorSource m_factor_source;  // the last factorization the next solves may reuse
   SolverStats m_stats;
   std::function<void(const std::string&)> m_progress;
 };

@@ -28,6 +28,8 @@ class DragTerm final : public EnergyTerm {
   void set(double c, const VecX& anchor, double director_weight, double axial_weight);
   double stiffness() const { return m_c; }             ///< c, per node [N/m]
   const VecX& anchor() const { return m_anchor; }      ///< the anchor state
+  double director_weight() const { return m_director; }  ///< set()'s director_weight
+  double axial_weight() const { return m_axial; }        ///< set()'s axial_weight
   /// Norm of the drag's force at q, each dof's component multiplied by `scale`; 0 without drag.
   double force_norm(const VecX& q, const VecX& scale) const;
   /// P u for node `node`'s position (the drag's force per unit stiffness).
