@@ -226,7 +226,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   nlohmann::json states = nlohmann::json::array();  // the state files written at step ends
   // Checkpoints ([output] checkpoint): the latest converged increment's, kept to be written
   // when the run is interrupted; the step's start and the last written one's wall times.
-  const auto [case_text, case_file] = case_source(c);
+  const std::pair<std::string, std::string> source = case_source(c);  // (text, file)
   std::optional<Checkpoint> latest;
   int written_checkpoint = -1;  // total increments of the last checkpoint written
   double checkpoint_time = 0.0, last_checkpoint_wall = 0.0, step_started = 0.0, last_wall = 0.0;
@@ -463,7 +463,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
         case OutputSpec::Checkpoint::Never: break;
       }
       latest = Checkpoint{solver.save_state(info.step, info.step_end ? info.step_index + 1 : info.step_index),
-                          solver.progress(), run_point().dump(), case_text, case_file};
+                          solver.progress(), run_point().dump(), source.first, source.second};
       if (due) {
         std::error_code ec;
         std::filesystem::create_directories(writer.dir() + "/state", ec);
