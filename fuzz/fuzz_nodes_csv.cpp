@@ -1,5 +1,5 @@
 // libFuzzer harness: a nodes.csv read back into the state of a model (read_nodes_csv,
-// io/slice.hpp; `fibra slice` reads it), here the model of examples/crossed_fibers. Any input
+// io/nodes_csv.hpp; `fibra slice` reads it), here the model of examples/crossed_fibers. Any input
 // either gives a state or an InputError; any other exception, a crash, a sanitizer report, a
 // leak or a hang is a finding (docs/sanitizers.md).
 #include <cstddef>
@@ -8,7 +8,7 @@
 
 #include "fibra/core/error.hpp"
 #include "fibra/io/case_reader.hpp"
-#include "fibra/io/slice.hpp"
+#include "fibra/io/nodes_csv.hpp"
 #include "fibra/model/model.hpp"
 #include "fuzz_input_file.hpp"
 

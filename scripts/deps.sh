@@ -8,7 +8,7 @@ packages=(
   build-essential cmake pkg-config git
   libeigen3-dev libsuitesparse-dev libopenblas-dev libmetis-dev
   libtomlplusplus-dev libcli11-dev libfmt-dev nlohmann-json3-dev
-  zlib1g-dev
+  zlib1g-dev libcairo2-dev fonts-dejavu-core
   libgtest-dev libgmock-dev libbenchmark-dev
   python3 python3-matplotlib python3-meshio
 )

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <csignal>
@@ -22,6 +23,7 @@
 #include "fibra/io/case_reader.hpp"
 #include "fibra/io/case_writer.hpp"
 #include "fibra/io/curve_plots.hpp"
+#include "fibra/io/nodes_csv.hpp"
 #include "fibra/io/output_writer.hpp"
 #include "fibra/io/result_curves.hpp"
 #include "fibra/io/slice.hpp"
@@ -238,9 +240,90 @@ int generate(const std::string& path, std::string out) {
   return 0;
 }
 
-int slice(const std::string& dir, const std::vector<std::string>& plane_texts, const std::string& out) {
+/// What `fibra slice` draws: planes (--plane), or the stations of one tow (--tow, --stations).
+struct SliceRequest {
+  std::vector<std::string> planes;
+  std::string tow;       ///< as given
+  std::string stations;  ///< as given
+  bool has_tow = false, has_stations = false;
+  std::string out;
+};
+
+/// The number of stations: an integer from 1 to 999.
+int parse_stations(const std::string& text) {
+  int n = 0;
+  const char* end = text.data() + text.size();
+  const auto [at, ec] = std::from_chars(text.data(), end, n);
+  if (text.empty() || ec != std::errc() || at != end || n < 1 || n > 999)
+    throw fibra::InputError("fibra slice", "--stations",
+                            fmt::format("expected the number of slices across the tow, an integer from 1 to 999 "
+                                        "(e.g. --stations 5), got \"{}\"",
+                                        text));
+  return n;
+}
+
+/// The slices of one tow at successive stations along it: RESULT/slices/tow_NAME_01 ... (or
+/// STEM_01 ...), only that tow's fibers, all at the same scale and frame.
+int slice_tow(const std::string& dir, const fibra::Case& c, const fibra::Model& model, const fibra::VecX& q,
+              const std::string& tow_name, int count, const std::string& out) {
+  const auto tow = std::find_if(c.tows.begin(), c.tows.end(), [&](const fibra::TowSpec& t) { return t.name == tow_name; });
+  if (tow == c.tows.end()) {
+    std::vector<std::string> names;
+    for (const fibra::TowSpec& t : c.tows) names.push_back(t.name);
+    throw fibra::InputError("fibra slice", "--tow",
+                            names.empty() ? fmt::format("no tow named \"{}\": the case has no tows", tow_name)
+                                          : fmt::format("no tow named \"{}\"; the case's tows: {}", tow_name,
+                                                        join_names(names)));
+  }
+  const int index = static_cast<int>(tow - c.tows.begin());
+  fibra::TowStations stations;
+  try {
+    stations = fibra::tow_stations(model, q, *tow, count);
+  } catch (const std::invalid_argument& e) {
+    throw fibra::InputError("fibra slice", "--tow " + tow_name, e.what());
+  }
+  std::vector<std::vector<fibra::SliceCut>> cuts;
+  Eigen::AlignedBox2d frame;  // one frame for all, so that the slices compare
+  for (const fibra::SlicePlane& plane : stations.planes) {
+    std::vector<fibra::SliceCut> all = fibra::slice_cuts(model, q, c.tows, plane), own;
+    for (fibra::SliceCut& cut : all)
+      if (cut.tow == index) own.push_back(std::move(cut));
+    frame.extend(fibra::slice_extent(own));
+    cuts.push_back(std::move(own));
+  }
+  const std::string title = c.title.empty() ? fs::path(dir).filename().string() : c.title;
+  const int width = std::max(2, static_cast<int>(std::to_string(count).size()));
+  const std::string base = out.empty() ? (fs::path(dir) / "slices" / ("tow_" + fibra::step_file_stem(tow_name))).string()
+                                       : out;
+  auto component = [](double x) { return std::abs(x) < 5e-5 ? 0.0 : x; };  // no "-0.0000"
+  fmt::print("tow {}: {} stations from {:.6g} to {:.6g} mm along its direction ({:.4f}, {:.4f}, {:.4f})\n", tow_name,
+             count, 1e3 * stations.start, 1e3 * stations.end, component(stations.direction.x()),
+             component(stations.direction.y()), component(stations.direction.z()));
+  for (int k = 0; k < count; ++k) {
+    const fibra::SlicePlane& plane = stations.planes[k];
+    const std::string stem = fmt::format("{}_{:0{}d}", base, k + 1, width);
+    const int fibers = fibra::write_slice(stem, cuts[k], c.tows, plane, title, frame);
+    fmt::print("station {} at {:.6g} mm: {} of {} fibers cut ({} polygons): {}.svg, {}.png\n", k + 1,
+               1e3 * (plane.offset - stations.start), fibers, tow->fibers.size(), cuts[k].size(), stem, stem);
+  }
+  return 0;
+}
+
+int slice(const std::string& dir, const SliceRequest& request) {
+  // The options are checked before anything is read.
+  if (!request.planes.empty() && request.has_tow)
+    throw fibra::InputError("fibra slice", "--tow", "give either --plane or --tow with --stations, not both");
+  if (request.planes.empty() && !request.has_tow && !request.has_stations)
+    throw fibra::InputError("fibra slice", "--plane",
+                            "expected --plane AXIS=VALUE (e.g. --plane x=0.5e-3) or --tow NAME --stations N");
+  if (request.has_tow && !request.has_stations)
+    throw fibra::InputError("fibra slice", "--stations",
+                            "--tow needs --stations N, the number of slices across the tow (e.g. --stations 5)");
+  if (!request.has_tow && request.has_stations)
+    throw fibra::InputError("fibra slice", "--stations", "--stations counts the slices of a tow: give --tow NAME too");
+  const int count = request.has_tow ? parse_stations(request.stations) : 0;
   std::vector<Plane> planes;
-  for (const std::string& t : plane_texts) planes.push_back(parse_plane(t));
+  for (const std::string& t : request.planes) planes.push_back(parse_plane(t));
   std::error_code ec;
   if (!fs::is_directory(dir, ec))
     throw fibra::InputError(dir, "(directory)",
@@ -255,6 +338,7 @@ int slice(const std::string& dir, const std::vector<std::string>& plane_texts, c
   const fibra::Case c = fibra::read_case(case_file.string());
   const fibra::Model model = fibra::build_model(c);
   const fibra::VecX q = fibra::read_nodes_csv(nodes_file.string(), model);
+  if (request.has_tow) return slice_tow(dir, c, model, q, request.tow, count, request.out);
 
   // Every plane is checked before anything is written.
   const Eigen::AlignedBox3d box = fibra::centroid_bounds(model, q);
@@ -268,12 +352,12 @@ int slice(const std::string& dir, const std::vector<std::string>& plane_texts, c
   for (size_t k = 0; k < planes.size(); ++k) {
     const Plane& p = planes[k];
     std::string stem;
-    if (out.empty())
+    if (request.out.empty())
       stem = slice_stem(fs::path(dir) / "slices", p.axis, p.value);
     else if (planes.size() == 1)
-      stem = out;
+      stem = request.out;
     else
-      stem = fmt::format("{}_{}_{}", out, fibra::slice_axis_name(p.axis), value_label(p.value));
+      stem = fmt::format("{}_{}_{}", request.out, fibra::slice_axis_name(p.axis), value_label(p.value));
     const int fibers = fibra::write_slice(stem, cuts[k], c.tows, p.axis, p.value, title);
     fmt::print("slice {} = {:g}: {} fibers cut ({} polygons): {}.svg, {}.png\n", fibra::slice_axis_name(p.axis),
                p.value, fibers, cuts[k].size(), stem, stem);
@@ -366,14 +450,20 @@ int main(int argc, char** argv) {
   generate_cmd->add_option("case", case_path, "case file")->required();
   generate_cmd->add_option("--out", out, "output directory (default <case file stem>_generated)");
   std::string result_dir;
-  std::vector<std::string> planes;
-  auto* slice_cmd = app.add_subcommand("slice", "draw the cut of a run's final state by planes (SVG and PNG)");
+  SliceRequest slice_request;
+  auto* slice_cmd = app.add_subcommand(
+      "slice", "draw the cut of a run's final state by planes, or the slices of one tow along it (SVG and PNG)");
   slice_cmd->add_option("result", result_dir, "output directory of `fibra run` (holds case.toml and nodes.csv)")
       ->required();
-  slice_cmd->add_option("--plane", planes, "a plane AXIS=VALUE, e.g. x=0.5e-3 (metres; repeat for several)")
-      ->required()
+  slice_cmd->add_option("--plane", slice_request.planes, "a plane AXIS=VALUE, e.g. x=0.5e-3 (metres; repeat for several)")
       ->allow_extra_args(false);
-  slice_cmd->add_option("--out", out, "file stem (default RESULT/slices/slice_<axis>_<value>)");
+  auto* tow_option = slice_cmd->add_option("--tow", slice_request.tow,
+                                          "a tow's name: slices across it at successive stations (with --stations)");
+  auto* stations_option = slice_cmd->add_option(
+      "--stations", slice_request.stations, "the number of slices across the --tow, evenly spaced between its ends (1 to 999)");
+  slice_cmd->add_option("--out", slice_request.out,
+                        "file stem (default RESULT/slices/slice_<axis>_<value>, or RESULT/slices/tow_<name> "
+                        "followed by _01, _02, ...)");
   std::vector<std::string> plot_dirs;
   auto* plot_cmd = app.add_subcommand(
       "plot", "draw the loading curves of biaxial and shear steps (PNG, SVG, JSON), several runs overlaid");
@@ -401,7 +491,11 @@ int main(int argc, char** argv) {
   try {
     if (*run_cmd) return run(case_path, out, threads, progress_lines, resume);
     if (*generate_cmd) return generate(case_path, out);
-    if (*slice_cmd) return slice(result_dir, planes, out);
+    if (*slice_cmd) {
+      slice_request.has_tow = tow_option->count() > 0;
+      slice_request.has_stations = stations_option->count() > 0;
+      return slice(result_dir, slice_request);
+    }
     if (*plot_cmd) return plot(plot_dirs, out);
     if (*export_cmd) return export_state(result_dir, export_words);
     return check(case_path);

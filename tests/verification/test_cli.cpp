@@ -19,10 +19,13 @@
 
 #include "fibra/io/case_reader.hpp"
 #include "fibra/io/case_writer.hpp"
+#include "fibra/io/nodes_csv.hpp"
+#include "fibra/io/slice.hpp"
 #include "io/case_compare.hpp"
 #include "support/curve_checks.hpp"
 #include "support/fabric_cases.hpp"
 #include "support/scratch_dir.hpp"
+#include "support/slice_files.hpp"
 
 namespace fibra {
 namespace {
@@ -378,11 +381,17 @@ TEST_F(Cli, GenerateWritesThePlainCaseItsViewsAndSlices) {
   // The middle slices: x = 0 (between the wefts) cuts the 6 warp fibers, y = 0 the 6 weft fibers.
   EXPECT_NE(r.out.find("slices/slice_x.png (x = 0 mm)"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("slices/slice_y.png (y = 0 mm)"), std::string::npos) << r.out;
+  // One path per cut in its tow's colour (warp0, warp1: 3 each), and the legend's swatch.
   const std::string svg_x = slurp(dir / "slices" / "slice_x.svg"), svg_y = slurp(dir / "slices" / "slice_y.svg");
-  EXPECT_NE(svg_x.find("6 fibers cut"), std::string::npos);
-  EXPECT_NE(svg_x.find("data-fiber=\"warp1.f2\""), std::string::npos);
-  EXPECT_EQ(svg_x.find("data-fiber=\"weft"), std::string::npos);
-  EXPECT_NE(svg_y.find("data-fiber=\"weft0.f0\""), std::string::npos);
+  EXPECT_EQ(test::xml_error(svg_x), "");
+  EXPECT_EQ(test::xml_error(svg_y), "");
+  const std::vector<test::Colour> fills_x = test::svg_path_fills(svg_x), fills_y = test::svg_path_fills(svg_y);
+  EXPECT_EQ(test::count_colour(fills_x, test::kSliceWarp[0]), 3 + 1);
+  EXPECT_EQ(test::count_colour(fills_x, test::kSliceWarp[1]), 3);
+  EXPECT_EQ(test::count_colour(fills_x, test::kSliceWeft[0]) + test::count_colour(fills_x, test::kSliceWeft[1]), 0);
+  EXPECT_EQ(test::count_colour(fills_y, test::kSliceWeft[0]), 3 + 1);
+  EXPECT_EQ(test::count_colour(fills_y, test::kSliceWeft[1]), 3);
+  EXPECT_EQ(test::count_colour(fills_y, test::kSliceWarp[0]) + test::count_colour(fills_y, test::kSliceWarp[1]), 0);
   // The bodies' view holds each body and its members: 4 + 8 bodies, each with members.
   EXPECT_NE(slurp(dir / "bodies" / "bodies_000000.vtu").find("NumberOfPoints"), std::string::npos);
 
@@ -640,25 +649,35 @@ TEST_F(Cli, SliceOfARunWritesSvgAndPng) {
   for (const char* name : {"slice_x_0.5.svg", "slice_x_0.5.png", "slice_y_0.1.svg", "slice_y_0.1.png"})
     EXPECT_TRUE(fs::is_regular_file(out / "slices" / name)) << name << "\n" << r.out;
   EXPECT_TRUE(is_png(out / "slices" / "slice_x_0.5.png"));
-  // x = 0.5 cuts both beams across; their cuts sit where the final state has them (bent down,
-  // b more than a), not at the reference z = 0.
+  // x = 0.5 cuts both beams across, where the final state has them (bent down): the SVG is the
+  // drawing of the cuts of the state in nodes.csv, not of the reference state.
+  const Case c = read_case((out / "case.toml").string());
+  const Model model = build_model(c);
+  const VecX q = read_nodes_csv((out / "nodes.csv").string(), model);
+  const std::vector<SliceCut> final_cuts = slice_cuts(model, q, c.tows, 0, 0.5);
+  ASSERT_EQ(final_cuts.size(), 2u);
+  EXPECT_LT(final_cuts[0].center.y(), -1e-6);  // a, bent down [m]
+  EXPECT_LT(final_cuts[1].center.y(), 1.5 * final_cuts[0].center.y());
+  write_slice((m_dir / "final").string(), final_cuts, c.tows, 0, 0.5, "Two beams");
+  write_slice((m_dir / "reference").string(), model, model.reference, c.tows, 0, 0.5, "Two beams");
   const std::string svg = slurp(out / "slices" / "slice_x_0.5.svg");
-  EXPECT_NE(svg.find("Two beams"), std::string::npos);
-  EXPECT_NE(svg.find("data-fiber=\"a\" data-tow=\"A\""), std::string::npos) << svg;
-  EXPECT_NE(svg.find("data-fiber=\"b\" data-tow=\"B\""), std::string::npos) << svg;
-  auto mean_z = [&](const std::string& fiber) {
-    const size_t at = svg.find("points=\"", svg.find("data-fiber=\"" + fiber + "\"")) + 8;
-    std::stringstream ss(svg.substr(at, svg.find('"', at) - at));
-    std::string pair;
-    double sum = 0;
-    int n = 0;
-    while (ss >> pair) sum += std::stod(pair.substr(pair.find(',') + 1)), ++n;
-    return n ? sum / n : 0.0;
-  };
-  EXPECT_LT(mean_z("a"), -1e-3);  // [mm]
-  EXPECT_LT(mean_z("b"), 1.5 * mean_z("a"));
-  // y = 0.1 runs along b: a strip.
-  EXPECT_NE(slurp(out / "slices" / "slice_y_0.1.svg").find("data-kind=\"strip\""), std::string::npos);
+  EXPECT_EQ(test::xml_error(svg), "");
+  EXPECT_EQ(svg, slurp(m_dir / "final.svg"));
+  EXPECT_NE(svg, slurp(m_dir / "reference.svg"));
+  const test::PngImage png = test::read_png((out / "slices" / "slice_x_0.5.png").string());
+  const SlicePage page = slice_page(final_cuts);
+  ASSERT_EQ(png.height, page.height) << png.error;
+  for (const SliceCut& cut : final_cuts) {
+    const Eigen::Vector2d p = page.to_page(cut.center);
+    const test::Colour expected = cut.name == "a" ? test::kSliceWarp[0] : test::kSliceWeft[0];
+    EXPECT_EQ(png.at(static_cast<int>(p.x()), static_cast<int>(p.y())), expected) << cut.name;
+  }
+  // y = 0.1 runs along b: a strip, one path in the weft's colour with the legend's swatch.
+  bool strip = false;
+  for (const SliceCut& cut : slice_cuts(model, q, c.tows, 1, 0.1)) strip |= cut.kind == SliceCut::Kind::Strip;
+  EXPECT_TRUE(strip);
+  EXPECT_EQ(test::count_colour(test::svg_path_fills(slurp(out / "slices" / "slice_y_0.1.svg")), test::kSliceWeft[0]),
+            1 + 1);
 
   // --out: the stem (one plane), or stem_AXIS_VALUE (several).
   r = fibra("slice out --plane x=0.25 --out mine");
@@ -688,8 +707,35 @@ TEST_F(Cli, SliceInputErrors) {
   }
   EXPECT_FALSE(fs::exists(out / "slices"));
 
+  // --tow and --stations: an unknown tow (the case's are listed), a count that is not one, one
+  // without the other, both with --plane, neither.
+  Result r = fibra("slice out --tow C --stations 3");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--tow"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("no tow named \"C\"; the case's tows: A, B"), std::string::npos) << r.err;
+  for (const char* count : {"0", "-2", "abc", "2.5", "1000", "''"}) {
+    r = fibra(std::string("slice out --tow A --stations ") + count);
+    EXPECT_EQ(r.code, 2) << count << ": " << r.err;
+    EXPECT_NE(r.err.find("--stations"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("an integer from 1 to 999"), std::string::npos) << r.err;
+  }
+  r = fibra("slice out --tow A");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--stations"), std::string::npos) << r.err;
+  r = fibra("slice out --stations 3");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--stations"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--tow"), std::string::npos) << r.err;
+  r = fibra("slice out --tow A --stations 3 --plane x=0.5");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("either --plane or --tow"), std::string::npos) << r.err;
+  r = fibra("slice out");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--plane"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out / "slices"));
+
   // A plane that misses every fiber: where the fibers are.
-  Result r = fibra("slice out --plane x=0.5 --plane y=3");
+  r = fibra("slice out --plane x=0.5 --plane y=3");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("y=3"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("cuts no fiber"), std::string::npos) << r.err;
@@ -722,6 +768,102 @@ TEST_F(Cli, SliceInputErrors) {
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("nodes.csv: line 2"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("zz"), std::string::npos) << r.err;
+}
+
+// A woven and relaxed plain weave: the slices of a warp tow at four stations (the tow alone,
+// each fiber of it cut once, the planes evenly spaced), and a slice along that tow showing it
+// waving over and under the wefts it crosses.
+TEST_F(Cli, SliceOfAWovenRunShowsATowsStationsAndTheWeaveAlongIt) {
+  write("fabric.toml", test::plain_friction_sample());
+  ASSERT_EQ(fibra("run fabric.toml --out out").code, 0);
+  const fs::path out = m_dir / "out";
+  Result r = fibra("slice out --tow warp0 --stations 4");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("tow warp0: 4 stations"), std::string::npos) << r.out;
+  const Case c = read_case((out / "case.toml").string());
+  const Model model = build_model(c);
+  const VecX q = read_nodes_csv((out / "nodes.csv").string(), model);
+  int warp0 = -1;
+  for (size_t t = 0; t < c.tows.size(); ++t)
+    if (c.tows[t].name == "warp0") warp0 = static_cast<int>(t);
+  ASSERT_GE(warp0, 0);
+  const TowSpec& tow = c.tows[warp0];
+  ASSERT_EQ(tow.fibers.size(), 3u);
+  const TowStations st = tow_stations(model, q, tow, 4);
+  EXPECT_GT(st.direction.x(), 0.99);
+  int height = 0;
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_NEAR(st.planes[k].offset - st.start, (k + 1) * (st.end - st.start) / 5, 1e-12) << k;
+    // Every fiber of the tow cut once, as a crossing.
+    std::map<std::string, int> cut;
+    for (const SliceCut& s : slice_cuts(model, q, c.tows, st.planes[k]))
+      if (s.tow == warp0) {
+        EXPECT_EQ(s.kind, SliceCut::Kind::Crossing) << s.name;
+        ++cut[s.name];
+      }
+    for (const std::string& f : tow.fibers) EXPECT_EQ(cut[f], 1) << f << " at station " << k + 1;
+    // The files: the tow's three fibers only (warp0's colour, with the swatch), one page size.
+    const std::string stem = fmt::format("out/slices/tow_warp0_0{}", k + 1);
+    EXPECT_NE(r.out.find(stem + ".svg"), std::string::npos) << r.out;
+    const std::string svg = slurp(m_dir / (stem + ".svg"));
+    EXPECT_EQ(test::xml_error(svg), "") << stem;
+    const std::vector<test::Colour> fills = test::svg_path_fills(svg);
+    EXPECT_EQ(test::count_colour(fills, test::kSliceWarp[0]), 3 + 1) << stem;
+    for (const test::Colour& weft : test::kSliceWeft) EXPECT_EQ(test::count_colour(fills, weft), 0) << stem;
+    const test::PngImage png = test::read_png((m_dir / (stem + ".png")).string());
+    EXPECT_EQ(png.width, 1200) << png.error;
+    if (k == 0) height = png.height;
+    EXPECT_EQ(png.height, height) << "the stations share one frame";
+  }
+  EXPECT_FALSE(fs::exists(out / "slices" / "tow_warp0_05.svg"));
+  r = fibra("slice out --tow weft1 --stations 2 --out pics/w");
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* name : {"w_01.svg", "w_01.png", "w_02.svg", "w_02.png"})
+    EXPECT_TRUE(fs::is_regular_file(m_dir / "pics" / name)) << name;
+
+  // Along the tow: the plane y through its middle fiber cuts that fiber along its length as
+  // strips, the wefts across; the fiber runs above one weft and below the other.
+  const Fiber& middle = model.fibers[model.fiber_index(tow.fibers[1])];
+  double y = 0;
+  for (Index k = 0; k < middle.num_nodes; ++k) y += q[kNodeDofs * (middle.first_node + k) + 1];
+  y /= static_cast<double>(middle.num_nodes);
+  int strips = 0;
+  std::map<std::string, double> weft_z;  // the mean z of each weft's crossings
+  std::map<std::string, int> weft_n;
+  std::vector<const SliceCut*> along;
+  const std::vector<SliceCut> cuts = slice_cuts(model, q, c.tows, 1, y);
+  for (const SliceCut& s : cuts) {
+    if (s.tow == warp0 && s.kind == SliceCut::Kind::Strip) {
+      ++strips;
+      along.push_back(&s);
+    }
+    if (s.tow >= 0 && c.tows[s.tow].direction == TowSpec::Direction::Weft && s.kind == SliceCut::Kind::Crossing) {
+      weft_z[c.tows[s.tow].name] += s.center.y();
+      ++weft_n[c.tows[s.tow].name];
+    }
+  }
+  EXPECT_GT(strips, 0);
+  ASSERT_EQ(weft_n.size(), 2u) << "crossings of both wefts";
+  // The strips' height over each weft's crossings, read from the polygons: above one, below
+  // the other (a plain weave).
+  std::vector<double> sides;
+  for (const auto& [name, n] : weft_n) {
+    const double z = weft_z[name] / n;
+    double x = 0;
+    int m = 0;
+    for (const SliceCut& s : cuts)
+      if (s.tow >= 0 && c.tows[s.tow].name == name && s.kind == SliceCut::Kind::Crossing) x += s.center.x(), ++m;
+    x /= m;
+    double above = 0, below = 0;  // the strips' points within 0.05 mm of x, above and below z
+    for (const SliceCut* s : along)
+      for (const Eigen::Vector2d& p : s->points)
+        if (std::abs(p.x() - x) < 0.05e-3) (p.y() > z ? above : below) += 1;
+    ASSERT_GT(above + below, 0) << name;
+    sides.push_back(above > below ? 1.0 : -1.0);
+  }
+  EXPECT_EQ(sides[0] * sides[1], -1.0) << "the warp passes over one weft and under the other";
+  r = fibra(fmt::format("slice out --plane y={}", y));
+  ASSERT_EQ(r.code, 0) << r.err;
 }
 
 }  // namespace

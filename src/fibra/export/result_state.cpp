@@ -6,7 +6,7 @@
 
 #include "fibra/core/error.hpp"
 #include "fibra/io/case_reader.hpp"
-#include "fibra/io/slice.hpp"
+#include "fibra/io/nodes_csv.hpp"
 
 namespace fibra {
 

@@ -15,6 +15,8 @@
 
 #include "fibra/beam/beam_element.hpp"
 #include "fibra/core/error.hpp"
+#include "fibra/io/csv.hpp"
+#include "fibra/io/nodes_csv.hpp"
 
 namespace fibra {
 
@@ -115,18 +117,6 @@ void write_atomic(const std::string& path, Fill&& fill) {
     fs::remove(tmp, ec);
     io_fail("cannot rename " + tmp + " to", path, err);
   }
-}
-
-/// A CSV field: quoted (with doubled quotes) when it holds a separator, quote or newline.
-std::string csv_field(const std::string& s) {
-  if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"') out += '"';
-    out += c;
-  }
-  out += '"';
-  return out;
 }
 
 /// Escapes text for an XML attribute value.
@@ -701,15 +691,7 @@ void OutputWriter::write_pvd(const std::string& name, const std::string& prefix,
 
 void OutputWriter::write_nodes(const VecX& q) const {
   check_state(q);
-  std::string text = "fiber,node,x,y,z,g1x,g1y,g1z,g2x,g2y,g2z\n";
-  for (const Fiber& fib : m_model.fibers) {
-    const std::string name = csv_field(fib.name);
-    for (Index j = 0; j < fib.num_nodes; ++j) {
-      const double* v = q.data() + kNodeDofs * (fib.first_node + j);
-      text += fmt::format("{},{},{},{},{},{},{},{},{},{},{}\n", name, j, v[0], v[1], v[2], v[3], v[4], v[5], v[6],
-                          v[7], v[8]);
-    }
-  }
+  const std::string text = nodes_csv_text(m_model, q);
   write_atomic(path("nodes.csv"), [&](CheckedFile& f) { f.write(text); });
 }
 

@@ -83,7 +83,7 @@ class OutputWriter {
   void write_increment(const VecX& q, const HistoryRow& row, double time, bool write_vtu,
                        const std::vector<ContactPoint>* contacts = nullptr,
                        const std::vector<BodyPoint>* bodies = nullptr);
-  /// Writes nodes.csv for state q: columns fiber,node,x,y,z,g1x,g1y,g1z,g2x,g2y,g2z (fiber name, node index local to the fiber), full double precision.
+  /// Writes nodes.csv for state q (nodes_csv_text, io/nodes_csv.hpp, which read_nodes_csv reads back): columns fiber,node,x,y,z,g1x,g1y,g1z,g2x,g2y,g2z (fiber name, node index local to the fiber), full double precision.
   void write_nodes(const VecX& q) const;
   /// Writes summary.json (pretty-printed, atomically: write tmp then rename).
   void write_summary(const nlohmann::json& summary) const;

@@ -1,77 +1,55 @@
 #pragma once
-/// Slices: the cut of a fiber assembly by a plane x = value, y = value (or z = value), drawn
-/// as an SVG (vector) and a PNG (raster, written without external libraries). Each fiber is
+/// Slices drawn: the cuts of a fiber assembly by a plane (model/slice_cuts.hpp) drawn once with
+/// Cairo onto two surfaces, an SVG (vector) and a PNG (raster) of the same page. Each fiber is
 /// coloured by its tow (warp tows in blues, weft tows in reds and oranges, fibers in no tow
-/// grey). File format and method: docs/outputs.md, "Slices".
-///
-/// Two kinds of cut:
-///  * a crossing: where a fiber's centroid curve crosses the plane (solved exactly on the
-///    element's quadratic interpolation) at less than 60 degrees from the plane's normal, the
-///    cut is the section ellipse {x0 + a cos t g1 + b sin t g2} carried along the fiber's
-///    tangent onto the plane: exact for a locally straight fiber, the section ellipse itself
-///    when the fiber crosses at right angle, elongated by 1/cos(angle) when it crosses
-///    obliquely;
-///  * a strip: where a fiber runs within 30 degrees of the plane (lying in it, or grazing
-///    it), the plane cuts its sections along chords; the chords of sections sampled along the
-///    fiber are joined into a band, closed at the ends where the chord vanishes.
-#include <array>
+/// grey). Page and colours: docs/outputs.md, "Slices".
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "fibra/core/types.hpp"
 #include "fibra/model/case.hpp"
 #include "fibra/model/model.hpp"
+#include "fibra/model/slice_cuts.hpp"
 
 namespace fibra {
 
-/// One polygon of a slice: a cut of one fiber by the plane.
-struct SliceCut {
-  enum class Kind { Crossing, Strip };
-  Kind kind = Kind::Crossing;
-  int fiber = 0;                                     ///< index into Model::fibers
-  std::string name;                                  ///< the fiber's name
-  int tow = -1;                                      ///< index into the tows given, -1 = in no tow
-  Eigen::Vector2d center = Eigen::Vector2d::Zero();  ///< crossing: the centroid point; strip: mean of the points
-  std::vector<Eigen::Vector2d> points;               ///< polygon, in the plane's coordinates [m]
+/// The page of a slice: where the plane's points are drawn. SVG user units are PNG pixels.
+struct SlicePage {
+  int width = 1200, height = 0;   ///< [px]
+  double scale = 1;               ///< [px per mm], the same along both axes
+  double u0 = 0, v1 = 0;          ///< plane coordinates [mm] at the plot's left and top edges
+  double left = 0, top = 0;       ///< the plot's top left corner [px]
+  double plot_w = 0, plot_h = 0;  ///< the plot's size [px]
+  double du = 0, dv = 0;          ///< the plot's size [mm]
+  /// The page point [px] of the plane point (u, v) [m].
+  Eigen::Vector2d to_page(const Eigen::Vector2d& uv) const {
+    return {left + (1e3 * uv.x() - u0) * scale, top + (v1 - 1e3 * uv.y()) * scale};
+  }
 };
 
-/// The plane's 2D coordinates: axis 0 (x = value) -> (y, z); axis 1 -> (x, z); axis 2 -> (x, y).
-/// Returns the two global components {u, v}.
-std::array<int, 2> slice_plane_axes(int axis);
+/// The page that draws `extent` (a region of the plane [m]; empty: the cuts' bounding box),
+/// grown by 5 % on every side, at the largest equal scale that fits 1086 px wide and 1400 px
+/// high.
+SlicePage slice_page(const std::vector<SliceCut>& cuts, const Eigen::AlignedBox2d& extent = Eigen::AlignedBox2d());
 
-/// "x", "y" or "z".
-const char* slice_axis_name(int axis);
+/// Writes `stem`.svg and `stem`.png (creating the parent directory) for precomputed cuts by
+/// `plane`: `title` on top, the plane and the count of cut fibers below it, the cuts in the
+/// plane's coordinates in mm at equal scale, axes with ticks, a scale bar and a legend; the
+/// page of slice_page(cuts, extent). Returns the number of cut fibers. Throws RunError when a
+/// file cannot be drawn or written, std::invalid_argument when a cut names a tow beyond `tows`.
+int write_slice(const std::string& stem, const std::vector<SliceCut>& cuts, const std::vector<TowSpec>& tows,
+                const SlicePlane& plane, const std::string& title,
+                const Eigen::AlignedBox2d& extent = Eigen::AlignedBox2d());
 
-/// All cuts of the fibers of `model` at state `q` (9 values per node, then the bodies') by the
-/// plane {p : p[axis] = value}, in fiber order (crossings and strips of a fiber in order
-/// along it). `tows` gives the colours (TowSpec::fibers are fiber names). axis is 0, 1 or 2.
-std::vector<SliceCut> slice_cuts(const Model& model, const VecX& q, const std::vector<TowSpec>& tows, int axis,
-                                 double value);
-
-/// Number of distinct fibers among the cuts.
-int slice_fiber_count(const std::vector<SliceCut>& cuts);
-
-/// Writes `stem`.svg and `stem`.png (creating the parent directory) for precomputed cuts:
-/// `title` on top, the plane and the count of cut fibers below it, the cuts in the plane's
-/// coordinates in mm at equal scale, axes with ticks, a scale bar and a legend. Returns the
-/// number of cut fibers. Throws RunError when a file cannot be written.
+/// write_slice() for the plane p[axis] = value (axis 0, 1 or 2).
 int write_slice(const std::string& stem, const std::vector<SliceCut>& cuts, const std::vector<TowSpec>& tows, int axis,
                 double value, const std::string& title);
 
-/// slice_cuts() then write_slice(); returns the number of cut fibers.
+/// slice_cuts() by the plane p[axis] = value, then write_slice(); returns the number of cut fibers.
 int write_slice(const std::string& stem, const Model& model, const VecX& q, const std::vector<TowSpec>& tows, int axis,
                 double value, const std::string& title);
-
-/// Smallest box holding the centroid nodes x0 of all fibers at state q [m].
-Eigen::AlignedBox3d centroid_bounds(const Model& model, const VecX& q);
-
-/// Reads a nodes.csv written by OutputWriter::write_nodes for `model` (same fibers, same
-/// meshes) into a state: the node values from the file, the bodies' values from the model's
-/// reference (centres from the case, no rotation). Throws InputError (path, "line N" or
-/// "(file)") on a missing file, a wrong header, an unknown fiber or node, a bad number, a
-/// node given twice or missing.
-VecX read_nodes_csv(const std::string& path, const Model& model);
 
 }  // namespace fibra
