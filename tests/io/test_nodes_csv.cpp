@@ -13,81 +13,14 @@
 #include "fibra/io/output_writer.hpp"
 #include "fibra/model/model.hpp"
 #include "support/scratch_dir.hpp"
+#include "support/straight_fibers.hpp"
 
 namespace fibra {
 namespace {
 
 using test::slurp;
 
-/// Six straight fibers of 1 to 5 elements, in tows or not; the last one's name is quoted in CSV.
-const std::string kStraight = R"(
-[[material]]
-name = "m"
-young = 1e9
-poisson = 0.3
-
-[[fiber]]
-name = "a1"
-material = "m"
-radius = 0.05e-3
-points = [[0, 0, 0], [1e-3, 0, 0]]
-elements = 3
-
-[[fiber]]
-name = "a2"
-material = "m"
-radius = 0.05e-3
-points = [[0, 0.2e-3, 0.05e-3], [1e-3, 0.2e-3, 0.05e-3]]
-elements = 3
-
-[[fiber]]
-name = "b1"
-material = "m"
-radius = 0.05e-3
-points = [[0, -0.3e-3, 0.2e-3], [1e-3, -0.3e-3, 0.2e-3]]
-elements = 5
-
-[[fiber]]
-name = "c1"
-material = "m"
-radius = 0.05e-3
-points = [[0, 0.5e-3, -0.1e-3], [1e-3, 0.5e-3, -0.1e-3]]
-elements = 3
-
-[[fiber]]
-name = "loose"
-material = "m"
-radius = 0.05e-3
-points = [[-0.3e-3, 0.8e-3, 0], [0.9e-3, 0.8e-3, 0]]
-elements = 2
-
-[[fiber]]
-name = "with, comma"
-material = "m"
-radius = 0.05e-3
-points = [[0, 1e-3, 0], [1e-3, 1e-3, 0]]
-elements = 1
-
-[[tow]]
-name = "A"
-direction = "warp"
-index = 0
-fibers = ["a1", "a2"]
-
-[[tow]]
-name = "B"
-direction = "weft"
-index = 0
-fibers = ["b1"]
-
-[[tow]]
-name = "C"
-direction = "warp"
-index = 1
-fibers = ["c1"]
-
-[[step]]
-)";
+const std::string kStraight = test::straight_fibers_with_quoted_name();
 
 class NodesCsv : public test::ScratchDirTest {
  protected:
