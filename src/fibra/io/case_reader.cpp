@@ -2163,20 +2163,21 @@ std::string read_text(const std::string& path) {
 
 }  // namespace
 
-Case parse_case_toml(const std::string& text, const std::string& file_label, const SizeLimits& limits) {
-  toml::table table;
+namespace {
+
+// The document tree of a TOML or JSON case file's text; InputError on a syntax error.
+Value toml_document(const std::string& text, const std::string& file_label) {
   try {
-    table = toml::parse(text, std::string_view(file_label));
+    return from_toml(toml::parse(text, std::string_view(file_label)));
   } catch (const toml::parse_error& e) {
     const auto& begin = e.source().begin;
     throw InputError(file_label, "(file)",
                      fmt::format("TOML syntax error at line {}, column {}: {}", begin.line,
                                  begin.column, e.description()));
   }
-  return finish(from_toml(table), file_label, false, limits);
 }
 
-Case parse_case_json(const std::string& text, const std::string& file_label, const SizeLimits& limits) {
+Value json_document(const std::string& text, const std::string& file_label) {
   JsonBuilder builder;
   if (!nlohmann::json::sax_parse(text, &builder)) {
     const std::string key = builder.error_key().empty() ? "(file)" : builder.error_key();
@@ -2191,7 +2192,17 @@ Case parse_case_json(const std::string& text, const std::string& file_label, con
   if (builder.root().type != Value::Type::Table) {
     throw InputError(file_label, "(file)", "expected a JSON object at the top level");
   }
-  return finish(builder.root(), file_label, true, limits);
+  return builder.root();
+}
+
+}  // namespace
+
+Case parse_case_toml(const std::string& text, const std::string& file_label, const SizeLimits& limits) {
+  return finish(toml_document(text, file_label), file_label, false, limits);
+}
+
+Case parse_case_json(const std::string& text, const std::string& file_label, const SizeLimits& limits) {
+  return finish(json_document(text, file_label), file_label, true, limits);
 }
 
 namespace {
@@ -2220,20 +2231,8 @@ void flatten(const Value& v, const std::string& path, std::map<std::string, std:
 }  // namespace
 
 std::map<std::string, std::string> case_file_keys(const std::string& text, bool json, const std::string& file_label) {
-  Value root;
-  if (json) {
-    JsonBuilder builder;
-    if (!nlohmann::json::sax_parse(text, &builder)) throw InputError(file_label, "(file)", "JSON syntax error");
-    root = builder.root();
-  } else {
-    try {
-      root = from_toml(toml::parse(text, std::string_view(file_label)));
-    } catch (const toml::parse_error& e) {
-      throw InputError(file_label, "(file)", fmt::format("TOML syntax error: {}", e.description()));
-    }
-  }
   std::map<std::string, std::string> out;
-  flatten(root, "", out);
+  flatten(json ? json_document(text, file_label) : toml_document(text, file_label), "", out);
   return out;
 }
 

@@ -69,7 +69,7 @@ class CheckedFile {
 /// Numbered files of a ParaView series (and their temporaries), in its subfolder or, as an
 /// older run left them, in the output directory itself.
 const std::regex& numbered_file() {
-  static const std::regex re(R"((fibers|lines|contacts|bodies)_\d{6}\.vtu(\.tmp)?)");
+  static const std::regex re(R"((fibers|lines|contacts|bodies)_(\d{6})\.vtu(\.tmp)?)");  // group 2: the index
   return re;
 }
 
@@ -392,8 +392,7 @@ OutputWriter::OutputWriter(std::string dir, const Model& model, std::vector<std:
     for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
       const std::string name = it->path().filename().string();
       std::smatch m;
-      static const std::regex numbered(R"((fibers|lines|contacts|bodies)_(\d{6})\.vtu(\.tmp)?)");
-      if (std::regex_match(name, m, numbered) && std::stoi(m[2].str()) >= next) {
+      if (std::regex_match(name, m, numbered_file()) && std::stoi(m[2].str()) >= next) {
         std::error_code rm;
         fs::remove(it->path(), rm);
       }

@@ -65,10 +65,11 @@ int step_of_key(const std::string& key) {
   return end == std::string::npos ? -1 : std::atoi(key.substr(5, end - 5).c_str());
 }
 
-/// Refuses a checkpoint whose case differs from `c` in anything but the steps after the one
-/// under way and the checkpoints' rate: the message lists what changed.
-void check_case_unchanged(const Case& c, const Checkpoint& ck, const std::string& checkpoint_file) {
-  const auto [text, file] = case_source(c);
+/// Refuses a checkpoint whose case differs from `c` (its source: case_source) in anything but
+/// the steps after the one under way and the checkpoints' rate: the message lists what changed.
+void check_case_unchanged(const Case& c, const std::pair<std::string, std::string>& source, const Checkpoint& ck,
+                          const std::string& checkpoint_file) {
+  const auto& [text, file] = source;
   if (text == ck.case_text) return;
   auto is_json = [](const std::string& f) { return std::filesystem::path(f).extension() == ".json"; };
   const auto before = case_file_keys(ck.case_text, is_json(ck.case_file), ck.case_file);
@@ -98,7 +99,8 @@ void check_case_unchanged(const Case& c, const Checkpoint& ck, const std::string
 }
 
 /// The checkpoint a resumed run goes on from: OUT/state/checkpoint.bin, of this case.
-Checkpoint load_checkpoint(const Case& c, const std::string& out_dir) {
+Checkpoint load_checkpoint(const Case& c, const std::pair<std::string, std::string>& source,
+                           const std::string& out_dir) {
   const std::string file = (std::filesystem::path(out_dir) / "state" / "checkpoint.bin").string();
   std::error_code ec;
   if (!std::filesystem::exists(file, ec)) {
@@ -116,7 +118,7 @@ Checkpoint load_checkpoint(const Case& c, const std::string& out_dir) {
                                        out_dir));
   }
   Checkpoint ck = read_checkpoint_file(file);
-  check_case_unchanged(c, ck, file);
+  check_case_unchanged(c, source, ck, file);
   return ck;
 }
 
@@ -134,10 +136,13 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                                    "give the run another --out directory",
                                    c.start));
   }
+  // The case as read (text, file): kept in checkpoints, compared with a resumed run's.
+  const std::pair<std::string, std::string> source = case_source(c);
   // --resume: the run goes on from the checkpoint in its output directory.
   const std::optional<Checkpoint> resumed =
-      options.resume ? std::optional<Checkpoint>(load_checkpoint(c, options.out_dir)) : std::nullopt;
-  const std::string checkpoint_file = options.out_dir + "/state/checkpoint.bin";
+      options.resume ? std::optional<Checkpoint>(load_checkpoint(c, source, options.out_dir)) : std::nullopt;
+  const std::string checkpoint_file =
+      (std::filesystem::path(options.out_dir.empty() ? "." : options.out_dir) / "state" / "checkpoint.bin").string();
   // An output directory that cannot be written stops the run before anything is computed.
   prepare_output_dir(options.out_dir, output_subdirs(c));
   const ResolvedCase resolved = resolve_case(c);
@@ -226,7 +231,6 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   nlohmann::json states = nlohmann::json::array();  // the state files written at step ends
   // Checkpoints ([output] checkpoint): the latest converged increment's, kept to be written
   // when the run is interrupted; the step's start and the last written one's wall times.
-  const std::pair<std::string, std::string> source = case_source(c);  // (text, file)
   std::optional<Checkpoint> latest;
   int written_checkpoint = -1;  // total increments of the last checkpoint written
   double checkpoint_time = 0.0, last_checkpoint_wall = 0.0, step_started = 0.0, last_wall = 0.0;
@@ -316,6 +320,12 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     j["states"] = states;
     writer.write_summary(j);
   };
+  // A file of the state/ subfolder (`name` relative to the output directory), the folder made.
+  auto state_path = [&](const std::string& name) {
+    std::error_code ec;
+    std::filesystem::create_directories(writer.dir() + "/state", ec);
+    return writer.dir() + "/" + name;
+  };
   auto observe = [&](const IncrementInfo& info, const VecX& q) {
     const StepSpec& st = c.steps[info.step_index];
     if (edges && st.is_test() && info.step_index != curves_step) {
@@ -398,9 +408,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     // The state at each step's end, for runs that go on from it ([start] from = this directory),
     // and with FIBRA_DEBUG_CHECKPOINT after every increment.
     auto save = [&](const std::string& name, int steps_done) {
-      std::error_code ec;
-      std::filesystem::create_directories(writer.dir() + "/state", ec);
-      write_state_file(writer.dir() + "/" + name, solver.save_state(info.step, steps_done));
+      write_state_file(state_path(name), solver.save_state(info.step, steps_done));
     };
     if (debug_checkpoint())
       save(fmt::format("state/checkpoint_{}_{}.bin", step_file_stem(info.step), info.increment), info.step_index);
@@ -465,9 +473,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
       latest = Checkpoint{solver.save_state(info.step, info.step_end ? info.step_index + 1 : info.step_index),
                           solver.progress(), run_point().dump(), source.first, source.second};
       if (due) {
-        std::error_code ec;
-        std::filesystem::create_directories(writer.dir() + "/state", ec);
-        write_checkpoint_file(checkpoint_file, *latest);
+        write_checkpoint_file(state_path("state/checkpoint.bin"), *latest);
         written_checkpoint = info.total_increments;
         last_checkpoint_wall = wall;
       }
@@ -552,7 +558,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     std::filesystem::remove(checkpoint_file, ec);
   } else if (report.result.status == RunResult::Status::Interrupted && latest &&
              latest->progress.total > written_checkpoint) {
-    write_checkpoint_file(checkpoint_file, *latest);
+    write_checkpoint_file(state_path("state/checkpoint.bin"), *latest);
   }
   report.stats = solver.stats();
   report.final_state = solver.state();

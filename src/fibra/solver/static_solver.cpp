@@ -1244,7 +1244,8 @@ void StaticSolver::resume(const SolverState& state, const SolverProgress& p) {
     throw std::logic_error("StaticSolver::resume: a checkpoint of another case (resume_run checks it)");
   restore_state(state);
   m_run = p;
-  m_run.factor = FactorSource{};
+  m_run.factor = FactorSource{};  // (kept in m_factor_source and the detector, not here)
+  m_run.detection_memory.clear();
   m_program->force_start = p.force_start;
   m_relax_drag = p.relax_drag;
   m_weave_depth = p.weave_depth;
