@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages fibra needs (only those missing). Run as root.
-#   bash scripts/deps.sh            build, tests, benchmarks, plots (meshio: the export's tests)
+#   bash scripts/deps.sh            build, tests, benchmarks, plots, the Python module (pybind11, numpy, tomli-w, pytest; meshio: the export's tests)
 #   bash scripts/deps.sh sanitize   also Clang with its sanitizer and libFuzzer run-times, its
 #                                   OpenMP and llvm-symbolizer (scripts/sanitize.sh, scripts/fuzz.sh)
 set -euo pipefail
@@ -10,7 +10,7 @@ packages=(
   libtomlplusplus-dev libcli11-dev libfmt-dev nlohmann-json3-dev
   zlib1g-dev libcairo2-dev fonts-dejavu-core
   libgtest-dev libgmock-dev libbenchmark-dev
-  python3 python3-matplotlib python3-meshio
+  python3 python3-dev python3-numpy python3-matplotlib python3-meshio python3-tomli-w python3-pytest pybind11-dev
 )
 case "${1:-}" in
   "") ;;

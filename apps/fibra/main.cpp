@@ -31,6 +31,7 @@
 #include "fibra/model/model.hpp"
 #include "fibra/run/resolve.hpp"
 #include "fibra/run/run_case.hpp"
+#include "fibra/run/slice_result.hpp"
 #include "fibra/solver/blas_threads.hpp"
 #include "fibra/solver/static_solver.hpp"
 
@@ -114,57 +115,6 @@ int run(const std::string& path, std::string out, int threads, bool progress_lin
 
 namespace fs = std::filesystem;
 
-/// A plane of a slice: p[axis] = value.
-struct Plane {
-  int axis = 0;
-  double value = 0;
-  std::string text;  ///< as given, for messages
-};
-
-/// Parses "x=0.5e-3" (axis x, y or z; the value in metres).
-Plane parse_plane(const std::string& text) {
-  auto fail = [&] {
-    throw fibra::InputError("fibra slice", "--plane",
-                            fmt::format("expected AXIS=VALUE with AXIS x, y or z and VALUE a position in metres "
-                                        "(e.g. --plane x=0.5e-3), got \"{}\"",
-                                        text));
-  };
-  const size_t eq = text.find('=');
-  if (eq == std::string::npos) fail();
-  auto trim = [](std::string s) {
-    s.erase(0, s.find_first_not_of(" \t"));
-    s.erase(s.find_last_not_of(" \t") + 1);
-    return s;
-  };
-  const std::string axis = trim(text.substr(0, eq)), value = trim(text.substr(eq + 1));
-  Plane p;
-  p.text = text;
-  if (axis == "x" || axis == "X") p.axis = 0;
-  else if (axis == "y" || axis == "Y") p.axis = 1;
-  else if (axis == "z" || axis == "Z") p.axis = 2;
-  else fail();
-  const char* begin = value.data();
-  if (!value.empty() && value[0] == '+') ++begin;
-  const auto [end, ec] = std::from_chars(begin, value.data() + value.size(), p.value);
-  if (value.empty() || ec != std::errc() || end != value.data() + value.size() || !std::isfinite(p.value)) fail();
-  return p;
-}
-
-/// "x from A to B, y from ..., z from ... m": where the fibers' centroid lines are.
-std::string describe_bounds(const Eigen::AlignedBox3d& box) {
-  return fmt::format("the fibers' centroid lines span x from {:.4g} to {:.4g}, y from {:.4g} to {:.4g}, "
-                     "z from {:.4g} to {:.4g} m",
-                     box.min().x(), box.max().x(), box.min().y(), box.max().y(), box.min().z(), box.max().z());
-}
-
-/// The plane's position in a file name: 6 significant digits, no "-0".
-std::string value_label(double value) { return fmt::format("{:.6g}", value == 0 ? 0.0 : value); }
-
-/// File stem of a slice: DIR/slice_x_0.0005.
-std::string slice_stem(const fs::path& dir, int axis, double value) {
-  return (dir / fmt::format("slice_{}_{}", fibra::slice_axis_name(axis), value_label(value))).string();
-}
-
 int generate(const std::string& path, std::string out) {
   const fibra::Case c = fibra::read_case(path);
   const std::string stem = fs::path(path).stem().string();
@@ -237,131 +187,6 @@ int generate(const std::string& path, std::string out) {
   fmt::print("{}: generated: {} fibers, {} nodes, {} dofs, {} bodies, {} tows\n", path, model.fibers.size(),
              model.num_nodes(), model.num_dofs(), model.bodies.size(), c.tows.size());
   fmt::print("files in {}/: {}\n", out, fmt::join(files, ", "));
-  return 0;
-}
-
-/// What `fibra slice` draws: planes (--plane), or the stations of one tow (--tow, --stations).
-struct SliceRequest {
-  std::vector<std::string> planes;
-  std::string tow;       ///< as given
-  std::string stations;  ///< as given
-  bool has_tow = false, has_stations = false;
-  std::string out;
-};
-
-/// The number of stations: an integer from 1 to 999.
-int parse_stations(const std::string& text) {
-  int n = 0;
-  const char* end = text.data() + text.size();
-  const auto [at, ec] = std::from_chars(text.data(), end, n);
-  if (text.empty() || ec != std::errc() || at != end || n < 1 || n > 999)
-    throw fibra::InputError("fibra slice", "--stations",
-                            fmt::format("expected the number of slices across the tow, an integer from 1 to 999 "
-                                        "(e.g. --stations 5), got \"{}\"",
-                                        text));
-  return n;
-}
-
-/// The slices of one tow at successive stations along it: RESULT/slices/tow_NAME_01 ... (or
-/// STEM_01 ...), only that tow's fibers, all at the same scale and frame.
-int slice_tow(const std::string& dir, const fibra::Case& c, const fibra::Model& model, const fibra::VecX& q,
-              const std::string& tow_name, int count, const std::string& out) {
-  const auto tow = std::find_if(c.tows.begin(), c.tows.end(), [&](const fibra::TowSpec& t) { return t.name == tow_name; });
-  if (tow == c.tows.end()) {
-    std::vector<std::string> names;
-    for (const fibra::TowSpec& t : c.tows) names.push_back(t.name);
-    throw fibra::InputError("fibra slice", "--tow",
-                            names.empty() ? fmt::format("no tow named \"{}\": the case has no tows", tow_name)
-                                          : fmt::format("no tow named \"{}\"; the case's tows: {}", tow_name,
-                                                        join_names(names)));
-  }
-  const int index = static_cast<int>(tow - c.tows.begin());
-  fibra::TowStations stations;
-  try {
-    stations = fibra::tow_stations(model, q, *tow, count);
-  } catch (const std::invalid_argument& e) {
-    throw fibra::InputError("fibra slice", "--tow " + tow_name, e.what());
-  }
-  std::vector<std::vector<fibra::SliceCut>> cuts;
-  Eigen::AlignedBox2d frame;  // one frame for all, so that the slices compare
-  for (const fibra::SlicePlane& plane : stations.planes) {
-    std::vector<fibra::SliceCut> all = fibra::slice_cuts(model, q, c.tows, plane), own;
-    for (fibra::SliceCut& cut : all)
-      if (cut.tow == index) own.push_back(std::move(cut));
-    frame.extend(fibra::slice_extent(own));
-    cuts.push_back(std::move(own));
-  }
-  const std::string title = c.title.empty() ? fs::path(dir).filename().string() : c.title;
-  const int width = std::max(2, static_cast<int>(std::to_string(count).size()));
-  const std::string base = out.empty() ? (fs::path(dir) / "slices" / ("tow_" + fibra::step_file_stem(tow_name))).string()
-                                       : out;
-  auto component = [](double x) { return std::abs(x) < 5e-5 ? 0.0 : x; };  // no "-0.0000"
-  fmt::print("tow {}: {} stations from {:.6g} to {:.6g} mm along its direction ({:.4f}, {:.4f}, {:.4f})\n", tow_name,
-             count, 1e3 * stations.start, 1e3 * stations.end, component(stations.direction.x()),
-             component(stations.direction.y()), component(stations.direction.z()));
-  for (int k = 0; k < count; ++k) {
-    const fibra::SlicePlane& plane = stations.planes[k];
-    const std::string stem = fmt::format("{}_{:0{}d}", base, k + 1, width);
-    const int fibers = fibra::write_slice(stem, cuts[k], c.tows, plane, title, frame);
-    fmt::print("station {} at {:.6g} mm: {} of {} fibers cut ({} polygons): {}.svg, {}.png\n", k + 1,
-               1e3 * (plane.offset - stations.start), fibers, tow->fibers.size(), cuts[k].size(), stem, stem);
-  }
-  return 0;
-}
-
-int slice(const std::string& dir, const SliceRequest& request) {
-  // The options are checked before anything is read.
-  if (!request.planes.empty() && request.has_tow)
-    throw fibra::InputError("fibra slice", "--tow", "give either --plane or --tow with --stations, not both");
-  if (request.planes.empty() && !request.has_tow && !request.has_stations)
-    throw fibra::InputError("fibra slice", "--plane",
-                            "expected --plane AXIS=VALUE (e.g. --plane x=0.5e-3) or --tow NAME --stations N");
-  if (request.has_tow && !request.has_stations)
-    throw fibra::InputError("fibra slice", "--stations",
-                            "--tow needs --stations N, the number of slices across the tow (e.g. --stations 5)");
-  if (!request.has_tow && request.has_stations)
-    throw fibra::InputError("fibra slice", "--stations", "--stations counts the slices of a tow: give --tow NAME too");
-  const int count = request.has_tow ? parse_stations(request.stations) : 0;
-  std::vector<Plane> planes;
-  for (const std::string& t : request.planes) planes.push_back(parse_plane(t));
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec))
-    throw fibra::InputError(dir, "(directory)",
-                            fs::exists(dir, ec) ? "not a directory: expected the output directory of `fibra run`"
-                                                : "no such directory: expected the output directory of `fibra run`");
-  const fs::path case_file = fs::path(dir) / "case.toml", nodes_file = fs::path(dir) / "nodes.csv";
-  for (const fs::path& f : {case_file, nodes_file})
-    if (!fs::is_regular_file(f, ec))
-      throw fibra::InputError(f.string(), "(file)",
-                              fmt::format("not found: `fibra slice` reads the case.toml and nodes.csv that "
-                                          "`fibra run` writes into its output directory"));
-  const fibra::Case c = fibra::read_case(case_file.string());
-  const fibra::Model model = fibra::build_model(c);
-  const fibra::VecX q = fibra::read_nodes_csv(nodes_file.string(), model);
-  if (request.has_tow) return slice_tow(dir, c, model, q, request.tow, count, request.out);
-
-  // Every plane is checked before anything is written.
-  const Eigen::AlignedBox3d box = fibra::centroid_bounds(model, q);
-  std::vector<std::vector<fibra::SliceCut>> cuts;
-  for (const Plane& p : planes) {
-    cuts.push_back(fibra::slice_cuts(model, q, c.tows, p.axis, p.value));
-    if (cuts.back().empty())
-      throw fibra::InputError("fibra slice", "--plane " + p.text, "the plane cuts no fiber: " + describe_bounds(box));
-  }
-  const std::string title = c.title.empty() ? fs::path(dir).filename().string() : c.title;
-  for (size_t k = 0; k < planes.size(); ++k) {
-    const Plane& p = planes[k];
-    std::string stem;
-    if (request.out.empty())
-      stem = slice_stem(fs::path(dir) / "slices", p.axis, p.value);
-    else if (planes.size() == 1)
-      stem = request.out;
-    else
-      stem = fmt::format("{}_{}_{}", request.out, fibra::slice_axis_name(p.axis), value_label(p.value));
-    const int fibers = fibra::write_slice(stem, cuts[k], c.tows, p.axis, p.value, title);
-    fmt::print("slice {} = {:g}: {} fibers cut ({} polygons): {}.svg, {}.png\n", fibra::slice_axis_name(p.axis),
-               p.value, fibers, cuts[k].size(), stem, stem);
-  }
   return 0;
 }
 
@@ -450,7 +275,7 @@ int main(int argc, char** argv) {
   generate_cmd->add_option("case", case_path, "case file")->required();
   generate_cmd->add_option("--out", out, "output directory (default <case file stem>_generated)");
   std::string result_dir;
-  SliceRequest slice_request;
+  fibra::SliceRequest slice_request;
   auto* slice_cmd = app.add_subcommand(
       "slice", "draw the cut of a run's final state by planes, or the slices of one tow along it (SVG and PNG)");
   slice_cmd->add_option("result", result_dir, "output directory of `fibra run` (holds case.toml and nodes.csv)")
@@ -494,7 +319,9 @@ int main(int argc, char** argv) {
     if (*slice_cmd) {
       slice_request.has_tow = tow_option->count() > 0;
       slice_request.has_stations = stations_option->count() > 0;
-      return slice(result_dir, slice_request);
+      const fibra::SliceOutcome outcome = fibra::slice_result(result_dir, slice_request);
+      for (const std::string& line : outcome.lines) fmt::print("{}\n", line);
+      return 0;
     }
     if (*plot_cmd) return plot(plot_dirs, out);
     if (*export_cmd) return export_state(result_dir, export_words);

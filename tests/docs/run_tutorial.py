@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
 """Runs docs/tutorial.md as a reader would, and fails when it no longer works.
 
-Every ```toml block whose first line is `# file: NAME` is written to NAME in a scratch
-directory; every ```console block is a list of commands (`$ COMMAND`) each followed by the
+Every ```toml or ```python block whose first line is `# file: NAME` is written to NAME in
+a scratch directory; every ```console block is a list of commands (`$ COMMAND`) each followed by the
 output the tutorial shows. Each command runs in the scratch directory with this build's
-`fibra` first on PATH; it must exit with 0 (or with the code a `# exit N` comment after it
+`fibra` first on PATH and its Python module first on the Python path; it must exit with 0 (or with the code a `# exit N` comment after it
 says), and every line the tutorial shows must appear in its output, in order, with numbers
 compared loosely (times and counts change from machine to machine: every number matches any
 number). A shown line `...` stands for lines left out.
@@ -62,10 +62,11 @@ def main():
     with open(tutorial, encoding="utf-8") as f:
         text = f.read()
     work = tempfile.mkdtemp(prefix="fibra_tutorial_")
-    env = dict(os.environ, PATH=build + os.pathsep + os.environ.get("PATH", ""))
+    env = dict(os.environ, PATH=build + os.pathsep + os.environ.get("PATH", ""),
+               PYTHONPATH=os.path.join(build, "python"))
     failures, ran = 0, 0
     for kind, lines in blocks(text):
-        if kind == "toml" and lines and lines[0].startswith("# file: "):
+        if kind in ("toml", "python") and lines and lines[0].startswith("# file: "):
             with open(os.path.join(work, lines[0][len("# file: "):].strip()), "w", encoding="utf-8") as f:
                 f.write("\n".join(lines[1:]) + "\n")
         if kind != "console":

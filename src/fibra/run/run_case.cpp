@@ -493,6 +493,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                                    e.what());
       throw RunError(output_failure + "; the run stops there, the outputs of the increments before it are kept");
     }
+    if (options.on_increment) options.on_increment(info);
   };
   // Initial (reference) state as increment 0 in the ParaView collection.
   std::vector<BodyPoint> initial_bodies;

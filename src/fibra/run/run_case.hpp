@@ -20,6 +20,9 @@ struct RunOptions {
   /// damaged, or the case changed in more than the steps not yet started.
   bool resume = false;
   std::function<void(const std::string&)> progress;  ///< one line per increment (may be empty)
+  /// Called after each converged increment, once its outputs are written (may be empty). To
+  /// stop the run from it, set interrupt_flag(): the run ends as interrupted, outputs kept.
+  std::function<void(const IncrementInfo&)> on_increment;
 };
 
 /// What a run did.
