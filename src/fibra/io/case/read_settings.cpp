@@ -1,0 +1,140 @@
+// The readers of [solver], [contact] and [output].
+#include "fibra/io/case/reader.hpp"
+
+#include <Eigen/Geometry>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "fibra/core/error.hpp"
+#include "fibra/io/case/suggest.hpp"
+
+namespace fibra::case_file {
+
+SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
+  expect_table(t, path);
+  // Former settings of the method, now its own rules (docs/theory/solver.md): named as such,
+  // not as unknown keys.
+  static const Keys kRules = {"line_search", "test_predictor", "ordering", "binding_stiffness", "max_step",
+                              "weave_drag", "relax_drag", "drag_axial", "test_inexact", "test_penetration_slack",
+                              "pseudo_tolerance", "krylov_iterations", "krylov_tolerance"};
+  for (std::string_view name : kRules)
+    if (const Value* v = find(t, name))
+      fail(join(path, name),
+           fmt::format("`{}` is not a setting: the solver sets it itself (docs/theory/solver.md); remove it", name), v);
+  for (const char* name : {"relax_tolerance", "test_tolerance"})
+    if (const Value* v = find(t, name))
+      fail(join(path, name),
+           fmt::format("`{}` is now the `tolerance` of each relax, biaxial or shear [[step]] (default 1e-4); move it "
+                       "there",
+                       name),
+           v);
+  check_keys(t, path,
+             {"residual_tolerance", "displacement_tolerance", "max_iterations", "max_cuts", "linear_solver",
+              "krylov_precision", "binding_tolerance", "max_binding_updates"});
+  SolverSpec s;
+  if (const Value* v = find(t, "residual_tolerance")) {
+    s.residual_tolerance = positive(*v, join(path, "residual_tolerance"));
+  }
+  if (const Value* v = find(t, "displacement_tolerance")) {
+    s.displacement_tolerance = positive(*v, join(path, "displacement_tolerance"));
+  }
+  if (const Value* v = find(t, "max_iterations")) {
+    s.max_iterations = to_int(*v, join(path, "max_iterations"), 1);
+  }
+  if (const Value* v = find(t, "max_cuts")) s.max_cuts = to_int(*v, join(path, "max_cuts"), 0);
+  if (const Value* v = find(t, "linear_solver"))
+    s.linear_solver = one_of(*v, join(path, "linear_solver"), {"cholmod", "eigen"});
+  if (const Value* v = find(t, "krylov_precision"))
+    s.krylov_precision = one_of(*v, join(path, "krylov_precision"), {"auto", "single", "double"});
+  if (const Value* v = find(t, "binding_tolerance")) {
+    s.binding_tolerance = positive(*v, join(path, "binding_tolerance"));
+  }
+  if (const Value* v = find(t, "max_binding_updates")) {
+    s.max_binding_updates = to_int(*v, join(path, "max_binding_updates"), 1);
+  }
+  return s;
+}
+
+ContactSpec Reader::read_contact(const Value& t, const std::string& path) const {
+  expect_table(t, path);
+  check_keys(t, path,
+             {"friction", "max_penetration", "elastic_slip", "stiffness", "regularization", "margin", "spacing",
+              "self_exclusion", "max_detections", "max_normal_updates", "normal_tolerance"});
+  ContactSpec c;
+  c.enabled = true;
+  const auto non_negative = [&](const char* name, double& out) {
+    if (const Value* v = find(t, name)) {
+      const std::string key = join(path, name);
+      out = to_number(*v, key);
+      if (!(out >= 0)) fail(key, fmt::format("expected a number >= 0, got {}", out), v);
+    }
+  };
+  non_negative("friction", c.friction);
+  if (const Value* v = find(t, "max_penetration")) {
+    const std::string key = join(path, "max_penetration");
+    c.max_penetration = to_number(*v, key);
+    if (!(c.max_penetration > 0 && c.max_penetration < 1))
+      fail(key, fmt::format("expected a fraction of the radius in (0, 1), got {}", c.max_penetration), v);
+  }
+  non_negative("elastic_slip", c.elastic_slip);
+  non_negative("stiffness", c.stiffness);
+  if (const Value* v = find(t, "regularization")) {
+    const std::string key = join(path, "regularization");
+    c.regularization = to_number(*v, key);
+    if (!(c.regularization > 0 && c.regularization <= 1))
+      fail(key, fmt::format("expected a fraction of the allowed penetration in (0, 1], got {}", c.regularization), v);
+  }
+  non_negative("margin", c.margin);
+  non_negative("spacing", c.spacing);
+  non_negative("self_exclusion", c.self_exclusion);
+  if (const Value* v = find(t, "max_detections")) c.max_detections = to_int(*v, join(path, "max_detections"), 1);
+  if (const Value* v = find(t, "max_normal_updates"))
+    c.max_normal_updates = to_int(*v, join(path, "max_normal_updates"), 1);
+  if (const Value* v = find(t, "normal_tolerance")) c.normal_tolerance = positive(*v, join(path, "normal_tolerance"));
+  return c;
+}
+
+void Reader::read_checkpoint(const Value& v, const std::string& key, OutputSpec& o) const {
+  const std::string expected =
+      "expected \"auto\", \"never\", a number of increments (an integer >= 1) or a time such as \"30 s\", "
+      "\"10 min\" or \"1 h\"";
+  if (v.type == Value::Type::Integer) {
+    o.checkpoint = OutputSpec::Checkpoint::Increments;
+    o.checkpoint_increments = to_int(v, key, 1);
+    return;
+  }
+  if (v.type != Value::Type::String) fail(key, fmt::format("{}, got {}", expected, describe(v)), &v);
+  if (v.text == "auto" || v.text == "never") {
+    o.checkpoint = v.text == "auto" ? OutputSpec::Checkpoint::Auto : OutputSpec::Checkpoint::Never;
+    return;
+  }
+  // A time: a positive number and a unit.
+  std::istringstream in(v.text);
+  double t = 0.0;
+  std::string unit, rest;
+  in >> t >> unit >> rest;
+  const double scale = unit == "s" ? 1.0 : unit == "min" ? 60.0 : unit == "h" ? 3600.0 : 0.0;
+  if (!(t > 0.0 && std::isfinite(t)) || scale == 0.0 || !rest.empty())
+    fail(key, fmt::format("{}, got \"{}\"", expected, v.text), &v);
+  o.checkpoint = OutputSpec::Checkpoint::Seconds;
+  o.checkpoint_seconds = t * scale;
+}
+
+OutputSpec Reader::read_output(const Value& t, const std::string& path) const {
+  expect_table(t, path);
+  check_keys(t, path, {"every", "tube_sides", "plots", "test_levels", "checkpoint"});
+  OutputSpec o;
+  if (const Value* v = find(t, "every")) o.every = to_int(*v, join(path, "every"), 1);
+  if (const Value* v = find(t, "tube_sides")) o.tube_sides = to_int(*v, join(path, "tube_sides"), 3);
+  if (const Value* v = find(t, "plots")) o.plots = to_bool(*v, join(path, "plots"));
+  if (const Value* v = find(t, "test_levels")) o.test_levels = to_bool(*v, join(path, "test_levels"));
+  if (const Value* v = find(t, "checkpoint")) read_checkpoint(*v, join(path, "checkpoint"), o);
+  return o;
+}
+}  // namespace fibra::case_file
