@@ -16,7 +16,7 @@
 namespace fibra::case_file {
 
 BodySpec Reader::read_body(const Value& t, const std::string& path) const {
-  check_keys(t, path, {"name", "center", "axes"});
+  check_keys(t, path, schema_keys("body"));
   BodySpec b;
   b.name = to_name(require(t, path, "name", "a string"), join(path, "name"));
   b.center = to_vec3(require(t, path, "center", "an array of 3 numbers [m]"), join(path, "center"));
@@ -64,7 +64,7 @@ BindingSpec Reader::read_binding(const Value& t, const std::string& path, std::s
     if (j < generated) return fmt::format("a binding the [fabric] generates (to body \"{}\")", earlier[j].body);
     return fmt::format("binding[{}] (to body \"{}\")", j - generated, earlier[j].body);
   };
-  check_keys(t, path, {"body", "ends", "bodies", "grip", "spin"});
+  check_keys(t, path, schema_keys("binding"));
   BindingSpec b;
   b.line = static_cast<int>(k);
   {
@@ -91,7 +91,7 @@ BindingSpec Reader::read_binding(const Value& t, const std::string& path, std::s
     };
     for (std::size_t i = 0; i < ends.size(); ++i) {
       const std::string end_path = item(key, i);
-      check_keys(ends[i], end_path, {"fiber", "node", "at"});
+      check_keys(ends[i], end_path, schema_keys("node"));
       NodeRef ref = read_node(ends[i], end_path, fibers);
       for (std::size_t j = 0; j < b.ends.size(); ++j) {
         const NodeRef& other = b.ends[j];
@@ -200,7 +200,7 @@ BindingSpec Reader::read_binding(const Value& t, const std::string& path, std::s
 
 BodyStepSpec Reader::read_step_body(const Value& t, const std::string& path,
                                     const std::vector<BodySpec>& bodies) const {
-  check_keys(t, path, {"name", "displacement", "rotation", "force", "moment"});
+  check_keys(t, path, schema_keys("step.body"));
   BodyStepSpec s;
   {
     const std::string key = join(path, "name");

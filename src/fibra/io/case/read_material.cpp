@@ -22,13 +22,13 @@ MaterialSpec Reader::read_material(const Value& t, const std::string& path) cons
                   ? MaterialSpec::Model::Isotropic
                   : MaterialSpec::Model::Transverse;
   if (m.model == MaterialSpec::Model::Isotropic) {
-    const std::string_view only = "only allowed with model = \"transverse\"";
-    check_keys(t, path, {"name", "model", "young", "poisson"},
-               {{"young_transverse", only}, {"shear_axial", only}, {"poisson_transverse", only}});
+    // The keys of the transverse model alone, named as such.
+    std::vector<KeyHint> hints;
+    for (const KeySpec& k : schema_section("material").keys)
+      if (k.variant == "transverse") hints.push_back({k.name, "only allowed with model = \"transverse\""});
+    check_keys(t, path, schema_keys("material", "isotropic"), hints);
   } else {
-    check_keys(t, path,
-               {"name", "model", "young", "poisson", "young_transverse", "shear_axial",
-                "poisson_transverse"});
+    check_keys(t, path, schema_keys("material", "transverse"));
   }
 
   m.name = to_name(require(t, path, "name", "a string"), join(path, "name"));
@@ -136,10 +136,10 @@ PathSpec Reader::read_path(const Value& t, const std::string& path) const {
   expect_table(table, base);
   if (is_arc) {
     p.kind = PathSpec::Kind::Arc;
-    check_keys(table, base, {"center", "axis", "radius", "start_angle", "angle"});
+    check_keys(table, base, schema_keys("fiber.arc"));
   } else {
     p.kind = PathSpec::Kind::Helix;
-    check_keys(table, base, {"center", "axis", "radius", "pitch", "turns", "start_angle"});
+    check_keys(table, base, schema_keys("fiber.helix"));
   }
   if (const Value* v = find(table, "center")) p.center = to_vec3(*v, join(base, "center"));
   if (const Value* v = find(table, "axis")) p.axis = to_direction(*v, join(base, "axis"));
@@ -163,9 +163,7 @@ PathSpec Reader::read_path(const Value& t, const std::string& path) const {
 
 FiberSpec Reader::read_fiber(const Value& t, const std::string& path,
                              const std::vector<MaterialSpec>& materials) const {
-  check_keys(t, path,
-             {"name", "material", "radius", "semi_axes", "section_direction", "points", "arc",
-              "helix", "elements"});
+  check_keys(t, path, schema_keys("fiber"));
   FiberSpec f;
   f.name = to_name(require(t, path, "name", "a string"), join(path, "name"));
 

@@ -76,7 +76,7 @@ NodeRef Reader::read_node(const Value& t, const std::string& path,
 
 FixSpec Reader::read_fix(const Value& t, const std::string& path,
                          const std::vector<FiberSpec>& fibers) const {
-  check_keys(t, path, {"fiber", "node", "at", "dofs"});
+  check_keys(t, path, schema_keys("fix"));
   FixSpec fix;
   fix.node = read_node(t, path, fibers);
   if (const Value* v = find(t, "dofs")) {
@@ -128,7 +128,7 @@ FixSpec Reader::read_fix(const Value& t, const std::string& path,
 
 LoadSpec Reader::read_load(const Value& t, const std::string& path,
                            const std::vector<FiberSpec>& fibers) const {
-  check_keys(t, path, {"fiber", "node", "at", "force", "moment"});
+  check_keys(t, path, schema_keys("step.load"));
   LoadSpec load;
   load.node = read_node(t, path, fibers);
   const Value* force = find(t, "force");
@@ -144,7 +144,7 @@ LoadSpec Reader::read_load(const Value& t, const std::string& path,
 
 DisplacementSpec Reader::read_displacement(const Value& t, const std::string& path,
                                            const std::vector<FiberSpec>& fibers) const {
-  check_keys(t, path, {"fiber", "node", "at", "value"});
+  check_keys(t, path, schema_keys("step.displacement"));
   DisplacementSpec d;
   d.node = read_node(t, path, fibers);
   const std::string key = join(path, "value");

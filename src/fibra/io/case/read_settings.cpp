@@ -34,9 +34,7 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
                        "there",
                        name),
            v);
-  check_keys(t, path,
-             {"residual_tolerance", "displacement_tolerance", "max_iterations", "max_cuts", "linear_solver",
-              "krylov_precision", "binding_tolerance", "max_binding_updates"});
+  check_keys(t, path, schema_keys("solver"));
   SolverSpec s;
   if (const Value* v = find(t, "residual_tolerance")) {
     s.residual_tolerance = positive(*v, join(path, "residual_tolerance"));
@@ -63,9 +61,7 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
 
 ContactSpec Reader::read_contact(const Value& t, const std::string& path) const {
   expect_table(t, path);
-  check_keys(t, path,
-             {"friction", "max_penetration", "elastic_slip", "stiffness", "regularization", "margin", "spacing",
-              "self_exclusion", "max_detections", "max_normal_updates", "normal_tolerance"});
+  check_keys(t, path, schema_keys("contact"));
   ContactSpec c;
   c.enabled = true;
   const auto non_negative = [&](const char* name, double& out) {
@@ -128,7 +124,7 @@ void Reader::read_checkpoint(const Value& v, const std::string& key, OutputSpec&
 
 OutputSpec Reader::read_output(const Value& t, const std::string& path) const {
   expect_table(t, path);
-  check_keys(t, path, {"every", "tube_sides", "plots", "test_levels", "checkpoint"});
+  check_keys(t, path, schema_keys("output"));
   OutputSpec o;
   if (const Value* v = find(t, "every")) o.every = to_int(*v, join(path, "every"), 1);
   if (const Value* v = find(t, "tube_sides")) o.tube_sides = to_int(*v, join(path, "tube_sides"), 3);

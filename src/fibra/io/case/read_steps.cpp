@@ -18,9 +18,7 @@ namespace fibra::case_file {
 
 StepSpec Reader::read_step(const Value& t, const std::string& path, std::size_t k,
                            const std::vector<FiberSpec>& fibers, const std::vector<BodySpec>& bodies) const {
-  check_keys(t, path,
-             {"name", "kind", "increments", "max_increments", "load", "displacement", "body", "strain", "ratio", "angle",
-              "height", "tolerance"});
+  check_keys(t, path, schema_keys("step"));
   StepSpec step;
   if (const Value* v = find(t, "name")) {
     step.name = to_name(*v, join(path, "name"));

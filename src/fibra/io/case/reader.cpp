@@ -70,8 +70,8 @@ void Reader::check_keys(const Value& table, const std::string& path, const Keys&
   } else {
     message += fmt::format("; allowed keys here: {}", list_names(known));
   }
-  if (!m_json && !path.empty() &&
-      std::find(kTopLevelKeys.begin(), kTopLevelKeys.end(), key) != kTopLevelKeys.end()) {
+  const Keys top_level = schema_keys("top");
+  if (!m_json && !path.empty() && std::find(top_level.begin(), top_level.end(), key) != top_level.end()) {
     message += "; a top-level key must be written before the first [table] header";
   }
   fail(join(path, key), message, first_bad);
@@ -276,7 +276,7 @@ void Reader::expect_material(const std::string& name, const Value& v, const std:
 }
 
 Case Reader::read(const Value& root) const {
-  check_keys(root, "", kTopLevelKeys);
+  check_keys(root, "", schema_keys("top"));
   if (const Value* start = find(root, "start")) return read_continued(root, *start);
   Case c;
   c.file = m_file;  // expand_fabric names it in its messages
@@ -437,7 +437,7 @@ Case Reader::read(const Value& root) const {
            v);
     }
     expect_table(*v, "weave");
-    check_keys(*v, "weave", {"matrix", "pattern"});
+    check_keys(*v, "weave", schema_keys("weave"));
     const Value* matrix = find(*v, "matrix");
     const Value* pattern = find(*v, "pattern");
     if (matrix && pattern) fail("weave", "give either pattern or matrix, not both", v);

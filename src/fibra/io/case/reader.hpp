@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "fibra/io/case/document.hpp"
+#include "fibra/io/case/schema.hpp"
 #include "fibra/model/case.hpp"
 #include "fibra/model/model_size.hpp"
 
@@ -26,9 +27,6 @@ struct KeyHint {
 
 using Keys = std::vector<std::string_view>;
 
-/// The keys of the top level of a case file.
-inline const Keys kTopLevelKeys = {"title", "material", "fiber",  "fabric",  "fix",    "body",  "binding",
-                            "tow",   "weave",    "start", "step",    "solver", "contact", "output"};
 // The model keys: a case with [start] takes its model from the earlier run instead.
 inline const Keys kModelKeys = {"material", "fiber", "fabric", "fix", "body", "binding", "tow", "weave"};
 
