@@ -36,26 +36,16 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
            v);
   check_keys(t, path, schema_keys("solver"));
   SolverSpec s;
-  if (const Value* v = find(t, "residual_tolerance")) {
-    s.residual_tolerance = positive(*v, join(path, "residual_tolerance"));
-  }
-  if (const Value* v = find(t, "displacement_tolerance")) {
-    s.displacement_tolerance = positive(*v, join(path, "displacement_tolerance"));
-  }
-  if (const Value* v = find(t, "max_iterations")) {
-    s.max_iterations = to_int(*v, join(path, "max_iterations"), 1);
-  }
-  if (const Value* v = find(t, "max_cuts")) s.max_cuts = to_int(*v, join(path, "max_cuts"), 0);
+  read_bounded(t, path, "solver", "residual_tolerance", s.residual_tolerance);
+  read_bounded(t, path, "solver", "displacement_tolerance", s.displacement_tolerance);
+  read_bounded(t, path, "solver", "max_iterations", s.max_iterations);
+  read_bounded(t, path, "solver", "max_cuts", s.max_cuts);
   if (const Value* v = find(t, "linear_solver"))
     s.linear_solver = one_of(*v, join(path, "linear_solver"), {"cholmod", "eigen"});
   if (const Value* v = find(t, "krylov_precision"))
     s.krylov_precision = one_of(*v, join(path, "krylov_precision"), {"auto", "single", "double"});
-  if (const Value* v = find(t, "binding_tolerance")) {
-    s.binding_tolerance = positive(*v, join(path, "binding_tolerance"));
-  }
-  if (const Value* v = find(t, "max_binding_updates")) {
-    s.max_binding_updates = to_int(*v, join(path, "max_binding_updates"), 1);
-  }
+  read_bounded(t, path, "solver", "binding_tolerance", s.binding_tolerance);
+  read_bounded(t, path, "solver", "max_binding_updates", s.max_binding_updates);
   return s;
 }
 
@@ -64,35 +54,27 @@ ContactSpec Reader::read_contact(const Value& t, const std::string& path) const 
   check_keys(t, path, schema_keys("contact"));
   ContactSpec c;
   c.enabled = true;
-  const auto non_negative = [&](const char* name, double& out) {
-    if (const Value* v = find(t, name)) {
-      const std::string key = join(path, name);
-      out = to_number(*v, key);
-      if (!(out >= 0)) fail(key, fmt::format("expected a number >= 0, got {}", out), v);
-    }
-  };
-  non_negative("friction", c.friction);
+  read_bounded(t, path, "contact", "friction", c.friction);
   if (const Value* v = find(t, "max_penetration")) {
     const std::string key = join(path, "max_penetration");
     c.max_penetration = to_number(*v, key);
     if (!(c.max_penetration > 0 && c.max_penetration < 1))
       fail(key, fmt::format("expected a fraction of the radius in (0, 1), got {}", c.max_penetration), v);
   }
-  non_negative("elastic_slip", c.elastic_slip);
-  non_negative("stiffness", c.stiffness);
+  read_bounded(t, path, "contact", "elastic_slip", c.elastic_slip);
+  read_bounded(t, path, "contact", "stiffness", c.stiffness);
   if (const Value* v = find(t, "regularization")) {
     const std::string key = join(path, "regularization");
     c.regularization = to_number(*v, key);
     if (!(c.regularization > 0 && c.regularization <= 1))
       fail(key, fmt::format("expected a fraction of the allowed penetration in (0, 1], got {}", c.regularization), v);
   }
-  non_negative("margin", c.margin);
-  non_negative("spacing", c.spacing);
-  non_negative("self_exclusion", c.self_exclusion);
-  if (const Value* v = find(t, "max_detections")) c.max_detections = to_int(*v, join(path, "max_detections"), 1);
-  if (const Value* v = find(t, "max_normal_updates"))
-    c.max_normal_updates = to_int(*v, join(path, "max_normal_updates"), 1);
-  if (const Value* v = find(t, "normal_tolerance")) c.normal_tolerance = positive(*v, join(path, "normal_tolerance"));
+  read_bounded(t, path, "contact", "margin", c.margin);
+  read_bounded(t, path, "contact", "spacing", c.spacing);
+  read_bounded(t, path, "contact", "self_exclusion", c.self_exclusion);
+  read_bounded(t, path, "contact", "max_detections", c.max_detections);
+  read_bounded(t, path, "contact", "max_normal_updates", c.max_normal_updates);
+  read_bounded(t, path, "contact", "normal_tolerance", c.normal_tolerance);
   return c;
 }
 
@@ -126,8 +108,8 @@ OutputSpec Reader::read_output(const Value& t, const std::string& path) const {
   expect_table(t, path);
   check_keys(t, path, schema_keys("output"));
   OutputSpec o;
-  if (const Value* v = find(t, "every")) o.every = to_int(*v, join(path, "every"), 1);
-  if (const Value* v = find(t, "tube_sides")) o.tube_sides = to_int(*v, join(path, "tube_sides"), 3);
+  read_bounded(t, path, "output", "every", o.every);
+  read_bounded(t, path, "output", "tube_sides", o.tube_sides);
   if (const Value* v = find(t, "plots")) o.plots = to_bool(*v, join(path, "plots"));
   if (const Value* v = find(t, "test_levels")) o.test_levels = to_bool(*v, join(path, "test_levels"));
   if (const Value* v = find(t, "checkpoint")) read_checkpoint(*v, join(path, "checkpoint"), o);

@@ -87,7 +87,7 @@ StepSpec Reader::read_step(const Value& t, const std::string& path, std::size_t 
                 "step's kind is not", v);
     step.tolerance = fraction(*v, key, "the reference force");
   }
-  if (const Value* v = find(t, "increments")) step.increments = to_int(*v, join(path, "increments"), 1);
+  read_bounded(t, path, "step", "increments", step.increments);
   if (const Value* v = find(t, "max_increments")) {
     const std::string key = join(path, "max_increments");
     step.max_increments = to_int(*v, key, 0);

@@ -8,6 +8,7 @@
 #include <climits>
 #include <cmath>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 #include <unordered_set>
 #include <vector>
@@ -200,6 +201,32 @@ double Reader::positive(const Value& v, const std::string& key) const {
   const double x = to_number(v, key);
   if (!(x > 0)) fail(key, fmt::format("must be > 0, got {}", x), &v);
   return x;
+}
+
+void Reader::read_bounded(const Value& t, const std::string& path, std::string_view section, std::string_view name,
+                          double& out) const {
+  const Value* v = find(t, name);
+  if (v == nullptr) return;
+  const KeySpec& spec = schema_key(section, name);
+  if (!spec.bounded() || spec.minimum != 0)
+    throw std::logic_error(fmt::format("read_bounded: {}.{} is not a number > 0 or >= 0", section, name));
+  const std::string key = join(path, name);
+  if (spec.exclusive) {
+    out = positive(*v, key);
+    return;
+  }
+  out = to_number(*v, key);
+  if (!(out >= 0)) fail(key, fmt::format("expected a number >= 0, got {}", out), v);
+}
+
+void Reader::read_bounded(const Value& t, const std::string& path, std::string_view section, std::string_view name,
+                          int& out) const {
+  const Value* v = find(t, name);
+  if (v == nullptr) return;
+  const KeySpec& spec = schema_key(section, name);
+  if (!spec.bounded() || spec.exclusive)
+    throw std::logic_error(fmt::format("read_bounded: {}.{} is not an integer >= a minimum", section, name));
+  out = to_int(*v, join(path, name), static_cast<int>(spec.minimum));
 }
 
 double Reader::fraction(const Value& v, const std::string& key, const char* relative_to) const {

@@ -97,6 +97,15 @@ class Reader {
 
   double positive(const Value& v, const std::string& key) const;
 
+  /// A plain number key `name` of the table `section` of the schema (KeySpec::bounded), read from
+  /// the table `t` at `path` into `out` and checked against its minimum; `out` keeps its value
+  /// when the key is not given.
+  void read_bounded(const Value& t, const std::string& path, std::string_view section, std::string_view name,
+                    double& out) const;
+  /// The same for a plain integer key.
+  void read_bounded(const Value& t, const std::string& path, std::string_view section, std::string_view name,
+                    int& out) const;
+
   /// A relative tolerance in (0, 1); `relative_to` says what it is relative to (for the message).
   double fraction(const Value& v, const std::string& key, const char* relative_to) const;
 

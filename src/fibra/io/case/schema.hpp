@@ -4,12 +4,15 @@
 /// "unknown key" refuses and what "did you mean" suggests), and the key tables of
 /// docs/case-file.md are its markdown (case_schema_markdown; tests/io/test_case_schema.cpp
 /// compares them).
+#include <limits>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
 namespace fibra::case_file {
+
+inline constexpr double kNotANumber = std::numeric_limits<double>::quiet_NaN();
 
 /// One key of a table of a case file. The texts are those of the docs (markdown).
 struct KeySpec {
@@ -22,6 +25,15 @@ struct KeySpec {
   /// The variant of the table the key belongs to alone (the `model` of a material,
   /// "transverse"); "" when it belongs to every variant.
   std::string_view variant = {};
+  /// A plain number or integer key (read as it is, with a lower bound alone): the value when it
+  /// is left out, which the case's structs hold (model/case.hpp), and the bound the reader
+  /// checks: > minimum when `exclusive`, else >= minimum. NaN for the other keys.
+  double number_default = kNotANumber;
+  double minimum = kNotANumber;
+  bool exclusive = false;
+
+  /// Whether the key is a plain number or integer (number_default and minimum given).
+  constexpr bool bounded() const { return minimum == minimum; }
 };
 
 /// One table of a case file. Its name is the path of the table with its array indices left out
