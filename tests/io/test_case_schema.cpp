@@ -107,6 +107,22 @@ TEST(CaseSchema, UnitsAreThoseOfTheMeanings) {
   }
 }
 
+TEST(CaseSchema, ChoicesAreThoseAllowed) {
+  // The words a string key may be are each in its Allowed text, quoted, in backticks.
+  std::size_t keys = 0;
+  for (const SectionSpec& s : case_schema()) {
+    for (const KeySpec& k : s.keys) {
+      if (k.choices.empty()) continue;
+      ++keys;
+      EXPECT_EQ(k.type, "string") << s.name << "." << k.name;
+      for (std::string_view word : k.choices)
+        EXPECT_NE(k.allowed.find(fmt::format("`\"{}\"`", word)), std::string_view::npos) << s.name << "." << k.name;
+    }
+  }
+  EXPECT_GE(keys, 7u);
+  EXPECT_EQ(schema_choices("solver", "krylov_precision"), (std::vector<std::string_view>{"auto", "single", "double"}));
+}
+
 TEST(CaseSchema, VariantsSelectKeys) {
   EXPECT_EQ(schema_keys("material", "isotropic"), (std::vector<std::string_view>{"name", "model", "young", "poisson"}));
   EXPECT_EQ(schema_keys("material", "transverse").size(), 7u);

@@ -286,7 +286,7 @@ TowSpec Reader::read_tow(const Value& t, const std::string& path, const std::vec
   }
   {
     const Value& v = require(t, path, "direction", "\"warp\" or \"weft\"");
-    tow.direction = one_of(v, join(path, "direction"), {"warp", "weft"}) == "warp" ? TowSpec::Direction::Warp
+    tow.direction = one_of(v, join(path, "direction"), schema_choices("tow", "direction")) == "warp" ? TowSpec::Direction::Warp
                                                                                   : TowSpec::Direction::Weft;
   }
   {

@@ -18,7 +18,7 @@ namespace fibra::case_file {
 MaterialSpec Reader::read_material(const Value& t, const std::string& path) const {
   MaterialSpec m;
   if (const Value* v = find(t, "model"))
-    m.model = one_of(*v, join(path, "model"), {"isotropic", "transverse"}) == "isotropic"
+    m.model = one_of(*v, join(path, "model"), schema_choices("material", "model")) == "isotropic"
                   ? MaterialSpec::Model::Isotropic
                   : MaterialSpec::Model::Transverse;
   if (m.model == MaterialSpec::Model::Isotropic) {

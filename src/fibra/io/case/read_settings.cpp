@@ -41,9 +41,9 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   read_bounded(t, path, "solver", "max_iterations", s.max_iterations);
   read_bounded(t, path, "solver", "max_cuts", s.max_cuts);
   if (const Value* v = find(t, "linear_solver"))
-    s.linear_solver = one_of(*v, join(path, "linear_solver"), {"cholmod", "eigen"});
+    s.linear_solver = one_of(*v, join(path, "linear_solver"), schema_choices("solver", "linear_solver"));
   if (const Value* v = find(t, "krylov_precision"))
-    s.krylov_precision = one_of(*v, join(path, "krylov_precision"), {"auto", "single", "double"});
+    s.krylov_precision = one_of(*v, join(path, "krylov_precision"), schema_choices("solver", "krylov_precision"));
   read_bounded(t, path, "solver", "binding_tolerance", s.binding_tolerance);
   read_bounded(t, path, "solver", "max_binding_updates", s.max_binding_updates);
   return s;

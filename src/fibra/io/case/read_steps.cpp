@@ -39,7 +39,7 @@ StepSpec Reader::read_step(const Value& t, const std::string& path, std::size_t 
     } else if (kind == "shear") {
       step.kind = StepSpec::Kind::Shear;
     } else {
-      const Keys words = {"standard", "load", "weave", "relax", "biaxial", "shear"};
+      const Keys words = schema_choices("step", "kind");
       fail(key,
            fmt::format("expected \"load\" (or \"standard\"), \"weave\", \"relax\", \"biaxial\" or \"shear\", got \"{}\"{}",
                        kind, did_you_mean(kind, words)),
@@ -78,7 +78,7 @@ StepSpec Reader::read_step(const Value& t, const std::string& path, std::size_t 
     step.angle = to_number(*v, join(path, "angle"));
     if (!(std::abs(step.angle) > 0.0 && std::abs(step.angle) < 80.0))
       fail(join(path, "angle"), fmt::format("expected an angle in degrees in (-80, 80), not 0, got {}", step.angle), v);
-    if (const Value* h = find(t, "height")) step.free_height = one_of(*h, join(path, "height"), {"held", "free"}) == "free";
+    if (const Value* h = find(t, "height")) step.free_height = one_of(*h, join(path, "height"), schema_choices("step", "height")) == "free";
   }
   if (const Value* v = find(t, "tolerance")) {
     const std::string key = join(path, "tolerance");

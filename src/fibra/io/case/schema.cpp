@@ -69,6 +69,7 @@ constexpr KeySpec kTop[] = {
      .meaning = "Output settings, `[output]`."},
 };
 
+constexpr std::string_view kMaterialModels[] = {"isotropic", "transverse"};
 constexpr KeySpec kMaterial[] = {
     {.name = "name",
      .type = "string",
@@ -79,7 +80,8 @@ constexpr KeySpec kMaterial[] = {
      .type = "string",
      .default_value = "`\"isotropic\"`",
      .allowed = "`\"isotropic\"`, `\"transverse\"`",
-     .meaning = "Material law."},
+     .meaning = "Material law.",
+     .choices = kMaterialModels},
     {.name = "young",
      .type = "number",
      .default_value = "required",
@@ -253,6 +255,8 @@ constexpr KeySpec kFix[] = {
      .meaning = "`\"position\"`: the centroid x0 only (a pin); `\"sections\"`: the section vectors g1, g2 only; `\"all\"`: both (a clamp). A list holds just those components, e.g. `[\"y\", \"g1\"]` keeps a node in the plane y = const with g1 fixed (planar problems, symmetry planes)."},
 };
 
+constexpr std::string_view kShearHeights[] = {"held", "free"};
+constexpr std::string_view kStepKinds[] = {"standard", "load", "weave", "relax", "biaxial", "shear"};
 constexpr KeySpec kStep[] = {
     {.name = "name",
      .type = "string",
@@ -263,7 +267,8 @@ constexpr KeySpec kStep[] = {
      .type = "string",
      .default_value = "`\"standard\"`",
      .allowed = "`\"standard\"` (or `\"load\"`), `\"weave\"`, `\"relax\"`, `\"biaxial\"`, `\"shear\"`",
-     .meaning = "What the step does, see below."},
+     .meaning = "What the step does, see below.",
+     .choices = kStepKinds},
     {.name = "increments",
      .type = "integer",
      .default_value = "`1`",
@@ -311,7 +316,8 @@ constexpr KeySpec kStep[] = {
      .type = "string",
      .default_value = "`\"held\"`",
      .allowed = "`\"held\"` or `\"free\"`; only with `kind = \"shear\"`",
-     .meaning = "The distance between the bottom and top edges: held (the wefts stretch by 1/cos(`angle`) − 1 as the sample shears), or free (the top edge keeps the force it had across, the weft tension: the wefts turn without stretching and the sample's height shrinks as cos(`angle`))."},
+     .meaning = "The distance between the bottom and top edges: held (the wefts stretch by 1/cos(`angle`) − 1 as the sample shears), or free (the top edge keeps the force it had across, the weft tension: the wefts turn without stretching and the sample's height shrinks as cos(`angle`)).",
+     .choices = kShearHeights},
     {.name = "tolerance",
      .type = "number",
      .default_value = "`1e-4`",
@@ -414,6 +420,7 @@ constexpr KeySpec kStepBody[] = {
      .meaning = "Moment about the centre at the end of the step [N m]."},
 };
 
+constexpr std::string_view kFabricGrips[] = {"averaged", "width", "clamped"};
 constexpr KeySpec kFabric[] = {
     {.name = "pattern",
      .type = "string",
@@ -451,7 +458,8 @@ constexpr KeySpec kFabric[] = {
      .type = "string",
      .default_value = "`\"averaged\"`",
      .allowed = "`\"averaged\"`, `\"width\"`, `\"clamped\"`",
-     .meaning = "How each tow-end body holds its fiber ends: `averaged` (the paper's binding: the ends' mean position and rotation), `width` (each end also held across the tow in the fabric's plane: D2 for warp ends, D1 for weft ends), `clamped` (and across the thickness, D3). With `width` and `clamped` each end's spin about its fiber's axis is held too. The generated `[[binding]]`s get the matching `grip` and `spin` (`docs/theory/fabric.md`, *Tow ends*)."},
+     .meaning = "How each tow-end body holds its fiber ends: `averaged` (the paper's binding: the ends' mean position and rotation), `width` (each end also held across the tow in the fabric's plane: D2 for warp ends, D1 for weft ends), `clamped` (and across the thickness, D3). With `width` and `clamped` each end's spin about its fiber's axis is held too. The generated `[[binding]]`s get the matching `grip` and `spin` (`docs/theory/fabric.md`, *Tow ends*).",
+     .choices = kFabricGrips},
     {.name = "tow",
      .type = "table",
      .default_value = "none",
@@ -522,6 +530,7 @@ constexpr KeySpec kFabricFiber[] = {
      .meaning = "Target element length [m]: each fiber gets the fewest elements not longer than this (at least 2). A fabric whose model would be too large to run is refused naming this key and the estimated size (\"Model size\", under `[[fiber]]`)."},
 };
 
+constexpr std::string_view kTowDirections[] = {"warp", "weft"};
 constexpr KeySpec kTow[] = {
     {.name = "name",
      .type = "string",
@@ -532,7 +541,8 @@ constexpr KeySpec kTow[] = {
      .type = "string",
      .default_value = "required",
      .allowed = "`\"warp\"`, `\"weft\"`",
-     .meaning = "Warp tows are the columns of the weave matrix, weft tows its rows."},
+     .meaning = "Warp tows are the columns of the weave matrix, weft tows its rows.",
+     .choices = kTowDirections},
     {.name = "index",
      .type = "integer",
      .default_value = "required",
@@ -567,6 +577,8 @@ constexpr KeySpec kStart[] = {
      .meaning = "The step of that run whose end state to start from."},
 };
 
+constexpr std::string_view kLinearSolvers[] = {"cholmod", "eigen"};
+constexpr std::string_view kKrylovPrecisions[] = {"auto", "single", "double"};
 constexpr KeySpec kSolver[] = {
     {.name = "residual_tolerance",
      .type = "number",
@@ -602,12 +614,14 @@ constexpr KeySpec kSolver[] = {
      .type = "string",
      .default_value = "`\"cholmod\"`",
      .allowed = "`\"cholmod\"`, `\"eigen\"`",
-     .meaning = "Sparse linear solver."},
+     .meaning = "Sparse linear solver.",
+     .choices = kLinearSolvers},
     {.name = "krylov_precision",
      .type = "string",
      .default_value = "`\"auto\"`",
      .allowed = "`\"auto\"`, `\"single\"`, `\"double\"`",
-     .meaning = "The factor the conjugate-gradient solves precondition with (`docs/theory/solver.md`, \"Reusing the factorization\"): `\"single\"` rounds a copy of it to floats after each factorization (half the memory traffic per CG iteration, substitutions on two threads; same iterations within a few), `\"double\"` uses the factor itself, `\"auto\"` takes single for factors of at least 1e7 nonzeros (CHOLMOD only)."},
+     .meaning = "The factor the conjugate-gradient solves precondition with (`docs/theory/solver.md`, \"Reusing the factorization\"): `\"single\"` rounds a copy of it to floats after each factorization (half the memory traffic per CG iteration, substitutions on two threads; same iterations within a few), `\"double\"` uses the factor itself, `\"auto\"` takes single for factors of at least 1e7 nonzeros (CHOLMOD only).",
+     .choices = kKrylovPrecisions},
     {.name = "binding_tolerance",
      .type = "number",
      .default_value = "`1e-8`",
@@ -784,6 +798,11 @@ const KeySpec& schema_key(std::string_view section, std::string_view key) {
     if (k.name == key) return k;
   throw std::logic_error("no key \"" + std::string(key) + "\" in table \"" + std::string(section) +
                          "\" of the case file schema");
+}
+
+std::vector<std::string_view> schema_choices(std::string_view section, std::string_view key) {
+  const KeySpec& k = schema_key(section, key);
+  return {k.choices.begin(), k.choices.end()};
 }
 
 std::vector<std::string_view> schema_keys(std::string_view section, std::string_view variant) {

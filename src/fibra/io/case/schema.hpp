@@ -31,6 +31,8 @@ struct KeySpec {
   double number_default = kNotANumber;
   double minimum = kNotANumber;
   bool exclusive = false;
+  /// A string key that is one of a few words: the words, in the order the reader lists them.
+  std::span<const std::string_view> choices = {};
 
   /// Whether the key is a plain number or integer (number_default and minimum given).
   constexpr bool bounded() const { return minimum == minimum; }
@@ -55,6 +57,9 @@ const SectionSpec& schema_section(std::string_view name);
 
 /// The key `key` of the table `section`; std::logic_error when there is none.
 const KeySpec& schema_key(std::string_view section, std::string_view key);
+
+/// The words a string key `section.key` may be (KeySpec::choices).
+std::vector<std::string_view> schema_choices(std::string_view section, std::string_view key);
 
 /// The names of the keys of table `section` (those of a node reference first, when it holds
 /// one). With a `variant`, only the keys of every variant and those of that one.
