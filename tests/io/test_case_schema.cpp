@@ -67,6 +67,19 @@ TEST(CaseSchema, DocsTablesAreTheSchemas) {
   }
 }
 
+TEST(CaseSchema, DocsAreWhatTheSchemaMakes) {
+  // The whole file, as case_schema_docs would rewrite it (build/src/fibra/io/case_schema_docs
+  // docs/case-file.md).
+  std::ifstream in(kDocs, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  EXPECT_TRUE(with_case_schema_tables(text.str()) == text.str())
+      << "docs/case-file.md differs from the schema: run case_schema_docs docs/case-file.md";
+  // The rewriting replaces a table whole and keeps the rest.
+  EXPECT_EQ(with_case_schema_tables("a\n<!-- schema: weave -->\n| old |\n|---|\n\nb"),
+            "a\n<!-- schema: weave -->\n" + case_schema_markdown("weave") + "\nb");
+}
+
 TEST(CaseSchema, DocsShowEveryTableOnce) {
   std::map<std::string, int> shown;
   for (const DocsTable& t : docs_tables()) {

@@ -871,4 +871,27 @@ std::string case_schema_markdown(std::string_view names) {
   return out;
 }
 
+std::string with_case_schema_tables(std::string_view markdown) {
+  constexpr std::string_view open = "<!-- schema: ", close = " -->";
+  std::string out;
+  bool in_table = false;  // in a table that follows a marker, which is replaced
+  for (std::size_t begin = 0; begin < markdown.size();) {
+    std::size_t end = markdown.find('\n', begin);
+    end = end == std::string_view::npos ? markdown.size() : end + 1;
+    const std::string_view line = markdown.substr(begin, end - begin);
+    begin = end;
+    if (in_table && line.starts_with("|")) continue;
+    in_table = false;
+    out += line;
+    std::string_view text = line;
+    if (text.ends_with("\n")) text.remove_suffix(1);
+    if (text.starts_with(open) && text.ends_with(close) && text.size() > open.size() + close.size()) {
+      if (!line.ends_with("\n")) out += "\n";
+      out += case_schema_markdown(text.substr(open.size(), text.size() - open.size() - close.size()));
+      in_table = true;
+    }
+  }
+  return out;
+}
+
 }  // namespace fibra::case_file

@@ -70,4 +70,9 @@ std::vector<std::string_view> schema_keys(std::string_view section, std::string_
 /// naming each key's (the last part of its name); the columns are those of the first.
 std::string case_schema_markdown(std::string_view sections);
 
+/// The markdown text `markdown` with each table that follows a line `<!-- schema: NAMES -->`
+/// (its lines that start with `|`) replaced by case_schema_markdown(NAMES): docs/case-file.md as
+/// the schema makes it (the program case_schema_docs writes it).
+std::string with_case_schema_tables(std::string_view markdown);
+
 }  // namespace fibra::case_file
