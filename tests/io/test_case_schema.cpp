@@ -459,6 +459,27 @@ name = "more"
   }
 }
 
+TEST(CaseSchema, StartTakesNoModelKey) {
+  // The top level's model keys are refused in a case with [start], each named; the others pass
+  // that check (and fail later, at [start].from, which names no run here).
+  std::size_t model = 0;
+  for (const KeySpec& k : schema_section("top").keys) {
+    if (k.name == "start" || k.name == "step") continue;
+    const std::string text = fmt::format("{} = 1\n\n[start]\nfrom = \"nowhere\"\n", k.name);
+    try {
+      parse_case_toml(text, "start.toml");
+      ADD_FAILURE() << text << " is accepted";
+    } catch (const InputError& e) {
+      const std::string message = e.what();
+      const bool named = message.find(fmt::format("start.toml: {}: a case with [start] takes its model", k.name)) !=
+                         std::string::npos;
+      EXPECT_EQ(named, k.variant == "model") << message;
+      model += named ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(model, 8u);
+}
+
 TEST(CaseSchema, ReaderChecksTheMinimums) {
   // Each plain number key of the settings just below its minimum: refused, naming the key.
   for (const char* section : {"solver", "contact", "output"}) {

@@ -18,12 +18,13 @@
 namespace fibra::case_file {
 
 Case Reader::read_continued(const Value& root, const Value& start) const {
-  for (const std::string_view key : kModelKeys)
-    if (const Value* v = find(root, key))
-      fail(std::string(key),
+  // The keys of the model (the top level's variant "model"), which the earlier run gives.
+  for (const KeySpec& k : schema_section("top").keys)
+    if (const Value* v = k.variant == "model" ? find(root, k.name) : nullptr)
+      fail(std::string(k.name),
            fmt::format("a case with [start] takes its model (materials, fibers, fabric, bodies, ...) from the run it "
                        "goes on from: remove the {} here, or remove [start] to build the model from this file",
-                       key),
+                       k.name),
            v);
   expect_table(start, "start");
   check_keys(start, "start", schema_keys("start"));

@@ -27,9 +27,6 @@ struct KeyHint {
 
 using Keys = std::vector<std::string_view>;
 
-// The model keys: a case with [start] takes its model from the earlier run instead.
-inline const Keys kModelKeys = {"material", "fiber", "fabric", "fix", "body", "binding", "tow", "weave"};
-
 /// The first words of the named weave patterns (model/fabric.hpp), for suggestions.
 inline const Keys kWeaveWords = {"plain", "twill", "basket", "satin"};
 

@@ -22,8 +22,10 @@ struct KeySpec {
   std::string_view allowed = {};        ///< the values accepted beyond the type ("> 0"); "" for any
   std::string_view unit = {};           ///< the SI unit the meaning gives in brackets (m, Pa, N, degrees, ...); "" for none
   std::string_view meaning = {};
-  /// The variant of the table the key belongs to alone (the `model` of a material,
-  /// "transverse"); "" when it belongs to every variant.
+  /// The variant of the table the key belongs to alone: the `model` of a material
+  /// ("transverse"); at the top level, "model" for the keys of a case that builds its model and
+  /// "start" for [start], which takes the model of an earlier run. "" when it belongs to every
+  /// variant.
   std::string_view variant = {};
   /// A plain number or integer key (read as it is, with a lower bound alone): the value when it
   /// is left out, which the case's structs hold (model/case.hpp), and the bound the reader
