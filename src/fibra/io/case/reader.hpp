@@ -1,7 +1,8 @@
 #pragma once
-/// The schema of a case file checked on its document tree (io/case/document.hpp), written once
-/// for both formats: the Reader's core (failures, descriptions of values, key checks,
-/// conversions) is in reader.cpp, each section's reader in read_<section>.cpp.
+/// The schema of a case file (io/case/schema.hpp) checked on its document tree
+/// (io/case/document.hpp), written once for both formats: the Reader's core (failures,
+/// descriptions of values, key checks, conversions) is in reader.cpp, each section's reader in
+/// read_<section>.cpp.
 #include <array>
 #include <cstdint>
 #include <numbers>

@@ -7,8 +7,8 @@
 namespace fibra::case_file {
 namespace {
 
-// One array per table, in the order of docs/case-file.md; each key's texts are those its table
-// there shows.
+// One array per table, in the order docs/case-file.md shows them; its key tables are made from
+// these (case_schema_markdown, case_schema_docs).
 
 constexpr KeySpec kTop[] = {
     {.name = "title",
