@@ -4,11 +4,15 @@
 
 #include <array>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "fibra/io/case/schema.hpp"
 
 namespace fibra {
 namespace {
@@ -70,6 +74,36 @@ std::string quoted(std::string_view s) {
   return out + "\"";
 }
 
+// Every key is named as the schema declares it (io/case/schema.hpp): a key the schema does not
+// have is a std::logic_error.
+
+/// `name = value`, `name` a key of the table `section` of the schema.
+std::string entry(std::string_view section, std::string_view name, const std::string& value) {
+  return fmt::format("{} = {}", case_file::schema_key(section, name).name, value);
+}
+
+/// The line `name = value` of the table `section`.
+std::string line(std::string_view section, std::string_view name, const std::string& value) {
+  return entry(section, name, value) + "\n";
+}
+
+/// The table `header` (`[solver]`) with every key of the table `section` of the schema, in its
+/// order, at its value in `values` (which has a value for each key and no other).
+std::string whole_table(std::string_view header, std::string_view section,
+                        const std::map<std::string_view, std::string>& values) {
+  std::string out = fmt::format("\n{}\n", header);
+  const case_file::SectionSpec& spec = case_file::schema_section(section);
+  for (const case_file::KeySpec& k : spec.keys) {
+    const auto it = values.find(k.name);
+    if (it == values.end())
+      throw std::logic_error(fmt::format("the case writer has no value for the key {}.{}", section, k.name));
+    out += fmt::format("{} = {}\n", k.name, it->second);
+  }
+  if (values.size() != spec.keys.size())
+    throw std::logic_error(fmt::format("the case writer writes keys of {} the schema does not have", section));
+  return out;
+}
+
 std::string vec3(const Vec3& v) { return fmt::format("[{}, {}, {}]", number(v[0]), number(v[1]), number(v[2])); }
 
 /// An array of 3 components, each a number or "free".
@@ -99,19 +133,19 @@ std::string node_keys(const NodeRef& n, std::string_view separator) {
   std::string where;
   switch (n.kind) {
     case NodeRef::Kind::First:
-      where = "node = \"first\"";
+      where = entry("node", "node", quoted("first"));
       break;
     case NodeRef::Kind::Last:
-      where = "node = \"last\"";
+      where = entry("node", "node", quoted("last"));
       break;
     case NodeRef::Kind::NodeIndex:
-      where = fmt::format("node = {}", n.index);
+      where = entry("node", "node", std::to_string(n.index));
       break;
     case NodeRef::Kind::Fraction:
-      where = fmt::format("at = {}", number(n.fraction));
+      where = entry("node", "at", number(n.fraction));
       break;
   }
-  return fmt::format("fiber = {}{}{}", quoted(n.fiber), separator, where);
+  return fmt::format("{}{}{}", entry("node", "fiber", quoted(n.fiber)), separator, where);
 }
 
 /// The `dofs` of a fix, or "" when it holds nothing.
@@ -143,90 +177,96 @@ std::string dofs_value(const FixSpec& f) {
 
 void write_material(std::string& out, const MaterialSpec& m) {
   out += "\n[[material]]\n";
-  out += fmt::format("name = {}\n", quoted(m.name));
+  out += line("material", "name", quoted(m.name));
   const bool transverse = m.model == MaterialSpec::Model::Transverse;
-  out += fmt::format("model = {}\n", quoted(transverse ? "transverse" : "isotropic"));
-  out += fmt::format("young = {}\n", number(m.young));
-  out += fmt::format("poisson = {}\n", number(m.poisson));
+  out += line("material", "model", quoted(transverse ? "transverse" : "isotropic"));
+  out += line("material", "young", number(m.young));
+  out += line("material", "poisson", number(m.poisson));
   if (transverse) {
-    out += fmt::format("young_transverse = {}\n", number(m.young_transverse));
-    out += fmt::format("shear_axial = {}\n", number(m.shear_axial));
-    out += fmt::format("poisson_transverse = {}\n", number(m.poisson_transverse));
+    out += line("material", "young_transverse", number(m.young_transverse));
+    out += line("material", "shear_axial", number(m.shear_axial));
+    out += line("material", "poisson_transverse", number(m.poisson_transverse));
   }
 }
 
 void write_fiber(std::string& out, const FiberSpec& f) {
   out += "\n[[fiber]]\n";
-  out += fmt::format("name = {}\n", quoted(f.name));
-  out += fmt::format("material = {}\n", quoted(f.material));
+  out += line("fiber", "name", quoted(f.name));
+  out += line("fiber", "material", quoted(f.material));
   if (f.semi_axis_1 == f.semi_axis_2 && f.radius == f.semi_axis_1) {
-    out += fmt::format("radius = {}\n", number(f.radius));
+    out += line("fiber", "radius", number(f.radius));
   } else {
-    out += fmt::format("semi_axes = [{}, {}]\n", number(f.semi_axis_1), number(f.semi_axis_2));
+    out += line("fiber", "semi_axes", fmt::format("[{}, {}]", number(f.semi_axis_1), number(f.semi_axis_2)));
   }
-  if (f.section_direction) out += fmt::format("section_direction = {}\n", vec3(*f.section_direction));
+  if (f.section_direction) out += line("fiber", "section_direction", vec3(*f.section_direction));
   const PathSpec& p = f.path;
   switch (p.kind) {
     case PathSpec::Kind::Polyline: {
       std::vector<std::string> points;
       for (const Vec3& x : p.points) points.push_back(vec3(x));
-      out += fmt::format("points = {}\n", array(points, 3));
+      out += line("fiber", "points", array(points, 3));
       break;
     }
     case PathSpec::Kind::Arc:
-      out +=
-          fmt::format("arc = {{ center = {}, axis = {}, radius = {}, start_angle = {}, angle = {} }}\n", vec3(p.center),
-                      vec3(p.axis), number(p.radius), number(degrees(p.start_angle)), number(degrees(p.angle)));
+      out += line("fiber", "arc",
+                  fmt::format("{{ {}, {}, {}, {}, {} }}", entry("fiber.arc", "center", vec3(p.center)),
+                              entry("fiber.arc", "axis", vec3(p.axis)), entry("fiber.arc", "radius", number(p.radius)),
+                              entry("fiber.arc", "start_angle", number(degrees(p.start_angle))),
+                              entry("fiber.arc", "angle", number(degrees(p.angle)))));
       break;
     case PathSpec::Kind::Helix:
-      out +=
-          fmt::format("helix = {{ center = {}, axis = {}, radius = {}, pitch = {}, turns = {}, start_angle = {} }}\n",
-                      vec3(p.center), vec3(p.axis), number(p.radius), number(p.pitch), number(p.turns),
-                      number(degrees(p.start_angle)));
+      out += line("fiber", "helix",
+                  fmt::format("{{ {}, {}, {}, {}, {}, {} }}", entry("fiber.helix", "center", vec3(p.center)),
+                              entry("fiber.helix", "axis", vec3(p.axis)),
+                              entry("fiber.helix", "radius", number(p.radius)),
+                              entry("fiber.helix", "pitch", number(p.pitch)),
+                              entry("fiber.helix", "turns", number(p.turns)),
+                              entry("fiber.helix", "start_angle", number(degrees(p.start_angle)))));
       break;
   }
-  out += fmt::format("elements = {}\n", f.elements);
+  out += line("fiber", "elements", std::to_string(f.elements));
 }
 
 void write_body(std::string& out, const BodySpec& b) {
   out += "\n[[body]]\n";
-  out += fmt::format("name = {}\n", quoted(b.name));
-  out += fmt::format("center = {}\n", vec3(b.center));
+  out += line("body", "name", quoted(b.name));
+  out += line("body", "center", vec3(b.center));
   if (b.axes != Mat3::Identity()) {
     // Rows D1, D2, D3: the columns of the frame.
-    out += fmt::format("axes = [{}, {}, {}]\n", vec3(b.axes.col(0)), vec3(b.axes.col(1)), vec3(b.axes.col(2)));
+    out += line("body", "axes",
+                fmt::format("[{}, {}, {}]", vec3(b.axes.col(0)), vec3(b.axes.col(1)), vec3(b.axes.col(2))));
   }
 }
 
 void write_binding(std::string& out, const BindingSpec& b) {
   out += "\n[[binding]]\n";
-  out += fmt::format("body = {}\n", quoted(b.body));
+  out += line("binding", "body", quoted(b.body));
   if (!b.ends.empty()) {
     std::vector<std::string> ends;
     for (const NodeRef& n : b.ends) ends.push_back(fmt::format("{{ {} }}", node_keys(n, ", ")));
-    out += fmt::format("ends = {}\n", array(ends, 2));
+    out += line("binding", "ends", array(ends, 2));
   }
   if (!b.bodies.empty()) {
     std::vector<std::string> bodies;
     for (const std::string& name : b.bodies) bodies.push_back(quoted(name));
-    out += fmt::format("bodies = {}\n", array(bodies, 8));
+    out += line("binding", "bodies", array(bodies, 8));
   }
   if (!b.grip.empty()) {
     std::string axes;
     for (int a : b.grip) axes += fmt::format("{}{}", axes.empty() ? "" : ", ", a);
-    out += fmt::format("grip = [{}]\n", axes);
+    out += line("binding", "grip", fmt::format("[{}]", axes));
   }
-  if (b.spin) out += "spin = true\n";
+  if (b.spin) out += line("binding", "spin", "true");
 }
 
 void write_tow(std::string& out, const TowSpec& t) {
   out += "\n[[tow]]\n";
-  out += fmt::format("name = {}\n", quoted(t.name));
-  out += fmt::format("direction = {}\n", quoted(t.direction == TowSpec::Direction::Warp ? "warp" : "weft"));
-  out += fmt::format("index = {}\n", t.index);
+  out += line("tow", "name", quoted(t.name));
+  out += line("tow", "direction", quoted(t.direction == TowSpec::Direction::Warp ? "warp" : "weft"));
+  out += line("tow", "index", std::to_string(t.index));
   std::vector<std::string> fibers;
   for (const std::string& name : t.fibers) fibers.push_back(quoted(name));
-  out += fmt::format("fibers = {}\n", array(fibers, 8));
+  out += line("tow", "fibers", array(fibers, 8));
 }
 
 void write_weave(std::string& out, const std::vector<std::vector<int>>& matrix) {
@@ -238,67 +278,83 @@ void write_weave(std::string& out, const std::vector<std::vector<int>>& matrix) 
     for (int e : row) entries.push_back(std::to_string(e));
     rows.push_back(array(entries, row.size()));
   }
-  out += fmt::format("matrix = {}\n", array(rows, 2));
+  out += line("weave", "matrix", array(rows, 2));
 }
 
 void write_step(std::string& out, const StepSpec& s) {
   out += "\n[[step]]\n";
-  out += fmt::format("name = {}\n", quoted(s.name));
-  out += fmt::format("kind = {}\n", quoted(StepSpec::kind_name(s.kind)));
-  if (s.kind == StepSpec::Kind::Biaxial) out += fmt::format("strain = {}\nratio = {}\n", number(s.strain), number(s.ratio));
+  out += line("step", "name", quoted(s.name));
+  out += line("step", "kind", quoted(StepSpec::kind_name(s.kind)));
+  if (s.kind == StepSpec::Kind::Biaxial) out += line("step", "strain", number(s.strain)) + line("step", "ratio", number(s.ratio));
   if (s.kind == StepSpec::Kind::Shear) {
-    out += fmt::format("angle = {}\n", number(s.angle));
-    if (s.free_height) out += "height = \"free\"\n";
+    out += line("step", "angle", number(s.angle));
+    if (s.free_height) out += line("step", "height", quoted("free"));
   }
-  if (s.is_proximal()) out += fmt::format("tolerance = {}\n", number(s.tolerance));
-  out += fmt::format("increments = {}\n", s.increments);
-  out += fmt::format("max_increments = {}\n", s.max_increments);
+  if (s.is_proximal()) out += line("step", "tolerance", number(s.tolerance));
+  out += line("step", "increments", std::to_string(s.increments));
+  out += line("step", "max_increments", std::to_string(s.max_increments));
   for (const LoadSpec& l : s.loads) {
     out += "\n  [[step.load]]\n";
     out += fmt::format("  {}\n", node_keys(l.node, "\n  "));
-    out += fmt::format("  force = {}\n", vec3(l.force));
-    out += fmt::format("  moment = {}\n", vec3(l.moment));
+    out += "  " + line("step.load", "force", vec3(l.force));
+    out += "  " + line("step.load", "moment", vec3(l.moment));
   }
   for (const DisplacementSpec& d : s.displacements) {
     out += "\n  [[step.displacement]]\n";
     out += fmt::format("  {}\n", node_keys(d.node, "\n  "));
-    out += fmt::format("  value = {}\n", components(d.value));
+    out += "  " + line("step.displacement", "value", components(d.value));
   }
   for (const BodyStepSpec& b : s.bodies) {
     out += "\n  [[step.body]]\n";
-    out += fmt::format("  name = {}\n", quoted(b.name));
-    if (b.has_displacement) out += fmt::format("  displacement = {}\n", components(b.displacement));
-    if (b.has_rotation) out += fmt::format("  rotation = {}\n", components(b.rotation));
-    if (b.force) out += fmt::format("  force = {}\n", vec3(*b.force));
-    if (b.moment) out += fmt::format("  moment = {}\n", vec3(*b.moment));
+    out += "  " + line("step.body", "name", quoted(b.name));
+    if (b.has_displacement) out += "  " + line("step.body", "displacement", components(b.displacement));
+    if (b.has_rotation) out += "  " + line("step.body", "rotation", components(b.rotation));
+    if (b.force) out += "  " + line("step.body", "force", vec3(*b.force));
+    if (b.moment) out += "  " + line("step.body", "moment", vec3(*b.moment));
   }
 }
 
 void write_solver(std::string& out, const SolverSpec& s) {
-  out += "\n[solver]\n";
-  out += fmt::format("residual_tolerance = {}\n", number(s.residual_tolerance));
-  out += fmt::format("displacement_tolerance = {}\n", number(s.displacement_tolerance));
-  out += fmt::format("max_iterations = {}\n", s.max_iterations);
-  out += fmt::format("max_cuts = {}\n", s.max_cuts);
-  out += fmt::format("linear_solver = {}\n", quoted(s.linear_solver));
-  out += fmt::format("krylov_precision = {}\n", quoted(s.krylov_precision));
-  out += fmt::format("binding_tolerance = {}\n", number(s.binding_tolerance));
-  out += fmt::format("max_binding_updates = {}\n", s.max_binding_updates);
+  out += whole_table("[solver]", "solver",
+                     {{"residual_tolerance", number(s.residual_tolerance)},
+                      {"displacement_tolerance", number(s.displacement_tolerance)},
+                      {"max_iterations", std::to_string(s.max_iterations)},
+                      {"max_cuts", std::to_string(s.max_cuts)},
+                      {"linear_solver", quoted(s.linear_solver)},
+                      {"krylov_precision", quoted(s.krylov_precision)},
+                      {"binding_tolerance", number(s.binding_tolerance)},
+                      {"max_binding_updates", std::to_string(s.max_binding_updates)}});
 }
 
 void write_contact(std::string& out, const ContactSpec& c) {
-  out += "\n[contact]\n";
-  out += fmt::format("friction = {}\n", number(c.friction));
-  out += fmt::format("max_penetration = {}\n", number(c.max_penetration));
-  out += fmt::format("elastic_slip = {}\n", number(c.elastic_slip));
-  out += fmt::format("stiffness = {}\n", number(c.stiffness));
-  out += fmt::format("regularization = {}\n", number(c.regularization));
-  out += fmt::format("margin = {}\n", number(c.margin));
-  out += fmt::format("spacing = {}\n", number(c.spacing));
-  out += fmt::format("self_exclusion = {}\n", number(c.self_exclusion));
-  out += fmt::format("max_detections = {}\n", c.max_detections);
-  out += fmt::format("max_normal_updates = {}\n", c.max_normal_updates);
-  out += fmt::format("normal_tolerance = {}\n", number(c.normal_tolerance));
+  out += whole_table("[contact]", "contact",
+                     {{"friction", number(c.friction)},
+                      {"max_penetration", number(c.max_penetration)},
+                      {"elastic_slip", number(c.elastic_slip)},
+                      {"stiffness", number(c.stiffness)},
+                      {"regularization", number(c.regularization)},
+                      {"margin", number(c.margin)},
+                      {"spacing", number(c.spacing)},
+                      {"self_exclusion", number(c.self_exclusion)},
+                      {"max_detections", std::to_string(c.max_detections)},
+                      {"max_normal_updates", std::to_string(c.max_normal_updates)},
+                      {"normal_tolerance", number(c.normal_tolerance)}});
+}
+
+void write_output(std::string& out, const OutputSpec& o) {
+  std::string checkpoint;
+  switch (o.checkpoint) {
+    case OutputSpec::Checkpoint::Auto: checkpoint = quoted("auto"); break;
+    case OutputSpec::Checkpoint::Never: checkpoint = quoted("never"); break;
+    case OutputSpec::Checkpoint::Increments: checkpoint = std::to_string(o.checkpoint_increments); break;
+    case OutputSpec::Checkpoint::Seconds: checkpoint = quoted(fmt::format("{} s", number(o.checkpoint_seconds))); break;
+  }
+  out += whole_table("[output]", "output",
+                     {{"every", std::to_string(o.every)},
+                      {"tube_sides", std::to_string(o.tube_sides)},
+                      {"plots", o.plots ? "true" : "false"},
+                      {"test_levels", o.test_levels ? "true" : "false"},
+                      {"checkpoint", checkpoint}});
 }
 
 }  // namespace
@@ -309,7 +365,7 @@ std::string write_case_toml(const Case& c) {
   // reference configuration; the comment keeps where its run started.
   if (!c.start.empty())
     out += fmt::format("# This run went on from the state (state.bin) of the result directory {}\n", c.start);
-  if (!c.title.empty()) out += fmt::format("title = {}\n", quoted(c.title));
+  if (!c.title.empty()) out += line("top", "title", quoted(c.title));
   for (const MaterialSpec& m : c.materials) write_material(out, m);
   for (const FiberSpec& f : c.fibers) write_fiber(out, f);
   for (const FixSpec& f : c.fixes) {
@@ -317,7 +373,7 @@ std::string write_case_toml(const Case& c) {
     if (dofs.empty()) continue;  // holds nothing
     out += "\n[[fix]]\n";
     out += node_keys(f.node, "\n") + "\n";
-    out += fmt::format("dofs = {}\n", dofs);
+    out += line("fix", "dofs", dofs);
   }
   for (const BodySpec& b : c.bodies) write_body(out, b);
   for (const BindingSpec& b : c.bindings) write_binding(out, b);
@@ -326,17 +382,7 @@ std::string write_case_toml(const Case& c) {
   for (const StepSpec& s : c.steps) write_step(out, s);
   write_solver(out, c.solver);
   if (c.contact.enabled) write_contact(out, c.contact);
-  out += "\n[output]\n";
-  out += fmt::format("every = {}\n", c.output.every);
-  out += fmt::format("tube_sides = {}\n", c.output.tube_sides);
-  out += fmt::format("plots = {}\n", c.output.plots);
-  out += fmt::format("test_levels = {}\n", c.output.test_levels);
-  switch (c.output.checkpoint) {
-    case OutputSpec::Checkpoint::Auto: out += "checkpoint = \"auto\"\n"; break;
-    case OutputSpec::Checkpoint::Never: out += "checkpoint = \"never\"\n"; break;
-    case OutputSpec::Checkpoint::Increments: out += fmt::format("checkpoint = {}\n", c.output.checkpoint_increments); break;
-    case OutputSpec::Checkpoint::Seconds: out += fmt::format("checkpoint = \"{} s\"\n", number(c.output.checkpoint_seconds)); break;
-  }
+  write_output(out, c.output);
   if (out.front() == '\n') out.erase(0, 1);  // no title
   return out;
 }
