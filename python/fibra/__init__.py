@@ -35,7 +35,7 @@ except ImportError:
     import numpy as _numpy  # noqa: F401
 
 from ._fibra import InputError, RunError  # noqa: E402
-from ._case import Case, load_case  # noqa: E402
+from ._case import Case, case_keys, load_case  # noqa: E402
 from ._result import Result, load_result, plot  # noqa: E402
 from ._run import Increment, RunInterrupted, run  # noqa: E402
 
@@ -44,6 +44,7 @@ __all__ = [
     "Increment",
     "InputError",
     "Result",
+    "case_keys",
     "RunError",
     "RunInterrupted",
     "load_case",

@@ -184,6 +184,19 @@ class Case:
         return f"<fibra.Case {self.name!r}{where}: steps {steps}>"
 
 
+def case_keys(table=None):
+    """The keys a case file (or a case dict) may hold, as the reader declares them (the tables
+    of docs/case-file.md): {table: [{"name", "type", "default", "allowed", "unit", "meaning",
+    "variant", "choices"}, ...]}, tables named by their path without indices ("top", "fiber",
+    "fabric.tow", "step.load", ...); with `table`, that table's list alone."""
+    tables = _fibra.schema()
+    if table is None:
+        return tables
+    if table not in tables:
+        raise KeyError(f"no table {table!r}; the tables: {', '.join(tables)}")
+    return tables[table]
+
+
 def load_case(path):
     """Reads and checks a case file (.toml or .json): a Case."""
     return Case.load(path)

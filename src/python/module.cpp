@@ -19,6 +19,7 @@
 #include "fibra/core/heap.hpp"
 #include "fibra/export/export_options.hpp"
 #include "fibra/export/export_result.hpp"
+#include "fibra/io/case/schema.hpp"
 #include "fibra/io/case_reader.hpp"
 #include "fibra/io/case_writer.hpp"
 #include "fibra/io/curve_plots.hpp"
@@ -230,6 +231,33 @@ py::dict slice(const std::string& dir, const std::vector<std::string>& planes, s
   return d;
 }
 
+/// The schema of case files (io/case/schema.hpp): {table: [key dicts]}.
+py::dict schema() {
+  py::dict tables;
+  for (const fibra::case_file::SectionSpec& section : fibra::case_file::case_schema()) {
+    py::list keys;
+    for (const std::string_view name : fibra::case_file::schema_keys(section.name)) {
+      const fibra::case_file::KeySpec* k = nullptr;
+      for (const fibra::case_file::KeySpec& candidate : section.keys)
+        if (candidate.name == name) k = &candidate;
+      if (k == nullptr) continue;  // a node reference's keys, listed in the table "node"
+      py::dict d;
+      d["name"] = std::string(k->name);
+      d["type"] = std::string(k->type);
+      d["default"] = std::string(k->default_value);
+      d["allowed"] = std::string(k->allowed);
+      d["unit"] = std::string(k->unit);
+      d["meaning"] = std::string(k->meaning);
+      d["variant"] = std::string(k->variant);
+      std::vector<std::string> choices(k->choices.begin(), k->choices.end());
+      d["choices"] = choices;
+      keys.append(d);
+    }
+    tables[py::str(std::string(section.name))] = keys;
+  }
+  return tables;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_fibra, m) {
@@ -281,6 +309,7 @@ PYBIND11_MODULE(_fibra, m) {
         return make_handle(std::move(c));
       },
       py::arg("text"), py::arg("json"), py::arg("label"), py::arg("name") = "");
+  m.def("schema", &schema);
   m.def("run", &run, py::arg("case"), py::arg("out"), py::arg("threads") = 0, py::arg("resume") = false,
         py::arg("on_increment") = py::none());
   m.def("slice", &slice, py::arg("dir"), py::arg("planes"), py::arg("tow") = py::none(),

@@ -107,3 +107,19 @@ def test_a_missing_file_and_a_syntax_error_are_input_errors(tmp_path):
     assert e.value.file == str(bad)
     with pytest.raises(TypeError):
         fibra.Case([1, 2])
+
+
+def test_the_schema_is_the_readers():
+    tables = fibra.case_keys()
+    assert {"top", "material", "fiber", "fabric", "step", "solver", "contact", "output"} <= set(tables)
+    fabric = {k["name"]: k for k in fibra.case_keys("fabric")}
+    assert "pattern" in fabric and fabric["pattern"]["type"] == "string"
+    solver = {k["name"]: k for k in fibra.case_keys("solver")}
+    assert solver["max_iterations"]["default"] not in ("", "required")
+    # A key the schema does not declare is refused in a case dict, as in a file.
+    data = fibra.load_case(EXAMPLES / "woven_sample" / "woven_sample.toml").to_dict()
+    data["contact"]["no_such_key"] = 1
+    with pytest.raises(fibra.InputError, match="contact.no_such_key"):
+        fibra.Case(data)
+    with pytest.raises(KeyError, match="no table"):
+        fibra.case_keys("nowhere")
