@@ -174,6 +174,12 @@ class Case:
         case.with_values({"fabric.warp.spacing": 0.4e-3, "step[2].strain": 0.02}) or
         case.with_values(title="denser"). Checked like any case."""
         data = copy.deepcopy(self._data)
+        start = data.get("start")
+        if self._file and isinstance(start, dict) and isinstance(start.get("from"), str) and \
+                not os.path.isabs(start["from"]):
+            # A file's relative `[start] from` is taken from the file's directory; a dict's from
+            # the current directory: the new case keeps pointing at the same run.
+            start["from"] = os.path.join(os.path.dirname(os.path.abspath(self._file)), start["from"])
         for key, value in {**(values or {}), **keys}.items():
             _set(data, key, value)
         return Case(data, name=name or self.name)

@@ -123,3 +123,15 @@ def test_the_schema_is_the_readers():
         fibra.Case(data)
     with pytest.raises(KeyError, match="no table"):
         fibra.case_keys("nowhere")
+
+
+def test_a_derived_case_goes_on_from_the_same_run(tmp_path):
+    """`[start] from` relative to the case file stays the same run in a case derived from it."""
+    out = tmp_path / "runs" / "first"
+    fibra.run(EXAMPLES / "cantilever" / "cantilever.toml", out=out, threads=1)
+    follow = tmp_path / "runs" / "follow.toml"
+    follow.write_text('[start]\nfrom = "first"\nstep = "load"\n\n[[step]]\nname = "more"\nincrements = 1\n')
+    case = fibra.load_case(follow)
+    derived = case.with_values({"step[0].increments": 2})
+    assert derived.to_dict()["start"]["from"] == str(tmp_path / "runs" / "first")
+    assert derived.steps[0]["increments"] == 2
