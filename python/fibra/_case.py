@@ -100,6 +100,8 @@ class Case:
     def __init__(self, data, name="case", *, _handle=None, _file=None):
         if not isinstance(data, dict):
             raise TypeError(f"a case is a dict of its tables and keys, got {type(data).__name__}")
+        if not isinstance(name, str) or not name or "/" in name or name in (".", ".."):
+            raise ValueError(f"name: expected a non-empty name for out/<name>, without '/', got {name!r}")
         self._file = _file
         if _handle is None:
             label = "<dict>"
@@ -115,8 +117,17 @@ class Case:
         path = os.fspath(path)
         handle = _fibra.read_case(path)
         with open(path, "rb") as f:
-            raw = f.read()
-        data = json.loads(raw) if path.endswith(".json") else tomllib.loads(raw.decode("utf-8"))
+            text = f.read().decode("utf-8-sig")
+        try:
+            data = json.loads(text) if path.lower().endswith(".json") else tomllib.loads(text)
+        except ValueError as e:  # the reader above accepted it: a difference of the parsers
+            raise _input_error(path, "(file)", f"Python cannot parse what fibra read: {e}") from None
+        start = data.get("start")
+        if isinstance(start, dict) and isinstance(start.get("from"), str) and not os.path.isabs(start["from"]):
+            # Taken from the file's directory (docs/case-file.md): made absolute, so that the
+            # case's dict, a case derived from it and the TOML it writes elsewhere go on from
+            # the same run.
+            start["from"] = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(path)), start["from"]))
         return cls(data, _handle=handle, _file=path)
 
     # -- what it holds ----------------------------------------------------------------------
@@ -174,13 +185,9 @@ class Case:
         case.with_values({"fabric.warp.spacing": 0.4e-3, "step[2].strain": 0.02}) or
         case.with_values(title="denser"). Checked like any case."""
         data = copy.deepcopy(self._data)
-        start = data.get("start")
-        if self._file and isinstance(start, dict) and isinstance(start.get("from"), str) and \
-                not os.path.isabs(start["from"]):
-            # A file's relative `[start] from` is taken from the file's directory; a dict's from
-            # the current directory: the new case keeps pointing at the same run.
-            start["from"] = os.path.join(os.path.dirname(os.path.abspath(self._file)), start["from"])
         for key, value in {**(values or {}), **keys}.items():
+            if not isinstance(key, str):
+                raise TypeError(f"a key path is a string such as \"fabric.warp.spacing\", got {key!r}")
             _set(data, key, value)
         return Case(data, name=name or self.name)
 

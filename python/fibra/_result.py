@@ -19,33 +19,48 @@ def _input_error(file, key, message):
     return error
 
 
-def _column(values):
-    """A CSV column as a numpy array: integers, floats (nan, inf accepted) or text."""
-    try:
-        if all(v.lstrip("-").isdigit() for v in values):
+# The columns of fibra's CSV files that hold counts (the others that hold numbers are floats).
+INTEGER_COLUMNS = {"node", "step_index", "increment", "iterations"}
+
+
+def _column(name, values):
+    """A CSV column as a numpy array: the count columns as int64, the numeric ones as float64
+    (an empty cell is nan), the others as text."""
+    if name in INTEGER_COLUMNS:
+        try:
             return np.array([int(v) for v in values], dtype=np.int64)
-        return np.array([float(v) for v in values], dtype=np.float64)
+        except ValueError:
+            pass
+    try:
+        return np.array([float(v) if v.strip() else np.nan for v in values], dtype=np.float64)
     except ValueError:
         return np.array(values, dtype=str)
 
 
 def read_csv(path):
     """A CSV file with a header line as a numpy structured array, one field per column, under
-    the column's own name ("body:warp0.start:fx"); integer columns as int64, numeric ones as
-    float64, the others as text."""
+    the column's own name ("body:warp0.start:fx"): the count columns (node, step_index,
+    increment, iterations) as int64, the other numeric ones as float64 (an empty cell is nan),
+    the others as text. A last line without its end of line (a run killed while writing it) is
+    left out."""
     path = os.fspath(path)
     try:
-        with open(path, newline="") as f:
-            rows = list(csv.reader(f))
+        with open(path, newline="", encoding="utf-8", errors="replace") as f:
+            text = f.read()
     except OSError as e:
         raise _input_error(path, "(file)", f"cannot be read: {e.strerror}") from None
+    if text and not text.endswith("\n"):
+        text = text[: text.rfind("\n") + 1]  # a line cut short
+    rows = list(csv.reader(text.splitlines()))
     if not rows:
         raise _input_error(path, "(file)", "empty: expected a header line")
     header, body = rows[0], rows[1:]
+    if len(set(header)) != len(header) or not all(header):
+        raise _input_error(path, "line 1", "expected a header of distinct, non-empty column names")
     for i, row in enumerate(body):
         if len(row) != len(header):
             raise _input_error(path, f"line {i + 2}", f"{len(row)} values for {len(header)} columns")
-    columns = [_column([row[k] for row in body]) for k in range(len(header))]
+    columns = [_column(name, [row[k] for row in body]) for k, name in enumerate(header)]
     dtype = [(name, c.dtype if c.dtype.kind != "U" else f"U{max(1, c.dtype.itemsize // 4)}")
              for name, c in zip(header, columns)]
     out = np.empty(len(body), dtype=dtype)
@@ -209,8 +224,11 @@ class Result:
 
     @property
     def fibers(self):
-        """{fiber name: Fiber} at the final state, in the case's order."""
+        """{fiber name: Fiber} at the final state, in the case's order. A run killed before it
+        wrote nodes.csv gives the last state lines.pvd saved."""
         def read():
+            if not (self.out / "nodes.csv").is_file() and (self.out / "lines.pvd").is_file():
+                return self._fibers_from_lines()
             n = self.nodes
             names, first = np.unique(n["fiber"], return_index=True)
             out = {}
@@ -222,6 +240,23 @@ class Result:
                                        xyz("g2x", "g2y", "g2z"))
             return out
         return self._cached("fibers", read)
+
+    def _fibers_from_lines(self):
+        """The fibers of the last increment lines.pvd lists (centroid lines with g1, g2)."""
+        import meshio  # python3-meshio
+        collection = self.out / "lines.pvd"
+        files = [d.get("file") for d in ElementTree.parse(collection).getroot().iter("DataSet")]
+        if not files:
+            raise _input_error(str(collection), "(file)", "lists no increment")
+        mesh = meshio.read(self.out / files[-1])
+        names = self.case._handle.fibers
+        fiber, node = mesh.point_data["fiber"].ravel(), mesh.point_data["node"].ravel()
+        out = {}
+        for k, name in enumerate(names):
+            rows = np.flatnonzero(fiber == k)
+            rows = rows[np.argsort(node[rows])]
+            out[name] = Fiber(name, mesh.points[rows], mesh.point_data["g1"][rows], mesh.point_data["g2"][rows])
+        return out
 
     def contacts(self, index=-1):
         """The contact elements of a saved increment of contacts.pvd (default the last), one
@@ -267,7 +302,7 @@ class Result:
     def export(self, out, *, voxels=None, voxel_size=None, box=None, samples=None):
         """Exports the final state for composite models, as `fibra export` does (docs/export.md):
         tow envelopes (STL, VTP), a voxel model (VTI) and an Abaqus input (INP) in `out`.
-        voxels: (NX, NY, NZ) or one count for the longest side; voxel_size: an edge [m];
+        voxels: (NX, NY, NZ); voxel_size: an edge [m] (instead of voxels);
         box: (xmin, ymin, zmin, xmax, ymax, zmax) [m]; samples: K^3 points per voxel.
         Returns a dict: files, notes, tows, voxels, voxel_size, fiber_volume_fraction."""
         def words(v):
@@ -291,5 +326,7 @@ def plot(results, out=""):
     """Draws the loading curves of several runs overlaid, one figure per step name they share
     (PNG, SVG, JSON), as `fibra plot` does; `results` are Results or directories, `out` the
     figures' directory (required for several runs). Returns the files written."""
+    if isinstance(results, (str, os.PathLike, Result)):
+        results = [results]
     dirs = [str(r.out) if isinstance(r, Result) else os.fspath(r) for r in results]
     return _fibra.plot(dirs, os.fspath(out))["files"]

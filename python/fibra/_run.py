@@ -1,6 +1,7 @@
 """Runs: a case solved step by step, as `fibra run` does, with its outputs in a directory."""
 
 import dataclasses
+import operator
 import os
 import sys
 
@@ -58,9 +59,16 @@ def run(case, out=None, *, threads=0, progress=None, resume=False):
         case = Case(case)
     elif not isinstance(case, Case):
         case = Case.load(case)
-    if threads < 0:
-        raise ValueError(f"threads: expected 0 (all cores) or a positive count, got {threads}")
+    try:
+        count = operator.index(threads)
+    except TypeError:
+        count = -1
+    if isinstance(threads, bool) or not 0 <= count <= 4096:
+        raise ValueError(f"threads: expected 0 (all cores) or a count of threads, got {threads!r}")
+    threads = count
     out = os.fspath(out) if out is not None else os.path.join("out", case.name)
+    if not out:
+        raise _fibra.InputError('fibra.run: out: expected a directory, got ""')
     callback = None
     if progress is True:
         def callback(info):

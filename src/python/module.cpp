@@ -11,6 +11,8 @@
 #include <csignal>
 #include <cstdlib>
 #include <memory>
+#include <mutex>
+#include <omp.h>
 #include <optional>
 #include <string>
 #include <vector>
@@ -38,9 +40,15 @@ namespace {
 /// A validated case, shared by the Python objects that hold it.
 struct CaseHandle {
   std::shared_ptr<const fibra::Case> c;
+  std::string text;  ///< the JSON text of a case built from a dict (empty for a case file)
 };
 
-CaseHandle make_handle(fibra::Case c) { return CaseHandle{std::make_shared<const fibra::Case>(std::move(c))}; }
+CaseHandle make_handle(fibra::Case c, std::string text = {}) {
+  return CaseHandle{std::make_shared<const fibra::Case>(std::move(c)), std::move(text)};
+}
+
+/// OpenMP's thread count when the module was loaded: threads = 0 means it (all cores).
+int initial_threads = 1;
 
 /// fibra.InputError (a ValueError) with the file and the key path as attributes.
 PyObject* input_error_type = nullptr;
@@ -109,8 +117,12 @@ py::dict report_dict(const fibra::RunReport& r, bool by_signal) {
 py::dict run(const CaseHandle& h, const std::string& out, int threads, bool resume, py::object on_increment) {
   fibra::RunOptions options;
   options.out_dir = out;
-  options.threads = threads;
+  options.threads = threads > 0 ? threads : initial_threads;
   options.resume = resume;
+  if (!h.text.empty()) {
+    options.case_text = h.text;
+    options.case_text_file = "case.json";
+  }
   std::optional<py::error_already_set> raised;
   if (!on_increment.is_none()) {
     options.on_increment = [&](const fibra::IncrementInfo& info) {
@@ -124,9 +136,22 @@ py::dict run(const CaseHandle& h, const std::string& out, int threads, bool resu
       }
     };
   }
+  // One run at a time in a process: the stop request (interrupt_flag) and OpenMP's threads are
+  // the process's. A second thread's run waits for the first (docs/python.md: run studies in
+  // parallel as processes).
+  static std::mutex one_run;
+  std::unique_lock<std::mutex> lock(one_run, std::defer_lock);
+  {
+    py::gil_scoped_release release;
+    lock.lock();
+  }
   fibra::interrupt_flag().store(false);
   interrupted_by_signal.store(false);
-  void (*previous)(int) = std::signal(SIGINT, on_sigint);
+  // Python's SIGINT handler only runs between bytecodes, never during the run: fibra's own
+  // handler stops it, and Python's is put back after. Only the main thread may set handlers.
+  const bool main_thread = PyGILState_Check() && _PyOS_IsMainThread();
+  void (*previous)(int) = main_thread ? std::signal(SIGINT, on_sigint) : SIG_ERR;
+  if (previous == SIG_IGN) std::signal(SIGINT, SIG_IGN);  // an ignored Ctrl-C stays ignored
   fibra::RunReport report;
   std::exception_ptr failure;
   {
@@ -142,8 +167,9 @@ py::dict run(const CaseHandle& h, const std::string& out, int threads, bool resu
       failure = std::current_exception();
     }
   }
-  std::signal(SIGINT, previous == SIG_ERR ? SIG_DFL : previous);
+  if (main_thread) std::signal(SIGINT, previous == SIG_ERR ? SIG_DFL : previous);
   fibra::interrupt_flag().store(false);
+  omp_set_num_threads(initial_threads);
   if (raised) throw std::move(*raised);
   if (failure) std::rethrow_exception(failure);
   return report_dict(report, interrupted_by_signal.load());
@@ -266,6 +292,7 @@ PYBIND11_MODULE(_fibra, m) {
   // environment variables libgomp and OpenBLAS read when they load.
   if (std::getenv("FIBRA_ADAPTIVE_BLAS_THREADS")) fibra::set_adaptive_blas_threads(true);
   fibra::keep_freed_memory();
+  initial_threads = omp_get_max_threads();
 
   input_error_type = PyErr_NewExceptionWithDoc(
       "fibra.InputError",
@@ -297,6 +324,12 @@ PYBIND11_MODULE(_fibra, m) {
                                for (const fibra::TowSpec& t : h.c->tows) names.push_back(t.name);
                                return names;
                              })
+      .def_property_readonly("fibers",
+                             [](const CaseHandle& h) {
+                               std::vector<std::string> names;
+                               for (const fibra::FiberSpec& f : h.c->fibers) names.push_back(f.name);
+                               return names;
+                             })
       .def("expanded_toml", [](const CaseHandle& h) { return fibra::write_case_toml(*h.c); })
       .def("check", &check);
 
@@ -306,7 +339,7 @@ PYBIND11_MODULE(_fibra, m) {
       [](const std::string& text, bool json, const std::string& label, const std::string& name) {
         fibra::Case c = json ? fibra::parse_case_json(text, label) : fibra::parse_case_toml(text, label);
         if (!name.empty()) c.name = name;
-        return make_handle(std::move(c));
+        return make_handle(std::move(c), json ? text : std::string());
       },
       py::arg("text"), py::arg("json"), py::arg("label"), py::arg("name") = "");
   m.def("schema", &schema);

@@ -135,3 +135,17 @@ def test_a_derived_case_goes_on_from_the_same_run(tmp_path):
     derived = case.with_values({"step[0].increments": 2})
     assert derived.to_dict()["start"]["from"] == str(tmp_path / "runs" / "first")
     assert derived.steps[0]["increments"] == 2
+
+
+def test_upper_case_json_and_a_byte_order_mark(tmp_path):
+    upper = tmp_path / "case.JSON"
+    upper.write_text(json.dumps(woven_dict()))
+    bom = tmp_path / "bom.toml"
+    bom.write_bytes(b"\xef\xbb\xbf" + WOVEN.read_bytes())
+    for path in (upper, bom):
+        try:
+            case = fibra.load_case(path)
+        except fibra.InputError as e:  # refused by the reader: then with a file and a key
+            assert e.file == str(path)
+            continue
+        assert case.to_dict() == woven_dict()

@@ -109,3 +109,34 @@ def test_a_directory_that_is_not_a_result(tmp_path):
     with pytest.raises(fibra.InputError) as e:
         fibra.load_result(tmp_path)
     assert e.value.key == "(file)" and e.value.file.endswith("case.toml")
+
+
+def test_a_killed_run_still_gives_its_fibers_and_a_cut_line_is_left_out(woven, tmp_path):
+    import shutil
+    killed = tmp_path / "killed"
+    shutil.copytree(woven.out, killed)
+    (killed / "nodes.csv").unlink()
+    history = (killed / "history.csv").read_text()
+    (killed / "history.csv").write_text(history[: history.rstrip("\n").rfind("\n") + 1] + "pull,2,3,0.5")
+    r = fibra.load_result(killed)
+    assert len(r.history) == len(woven.history) - 1
+    fibers = r.fibers
+    assert list(fibers) == list(woven.fibers)
+    # lines.pvd's last saved increment is the final state nodes.csv held.
+    np.testing.assert_allclose(fibers["weft1.f2"].positions, woven.fibers["weft1.f2"].positions, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(fibers["weft1.f2"].g2, woven.fibers["weft1.f2"].g2, rtol=0, atol=1e-12)
+
+
+def test_csv_columns_and_bad_files(tmp_path):
+    from fibra._result import read_csv
+    p = tmp_path / "t.csv"
+    p.write_text("step,increment,x,name\nload,1,2,a\nload,2,,b\n")
+    t = read_csv(p)
+    assert t.dtype["increment"].kind == "i" and t.dtype["x"].kind == "f" and t.dtype["name"].kind == "U"
+    assert t["x"][0] == 2.0 and np.isnan(t["x"][1])
+    p.write_text("a,a\n1,2\n")
+    with pytest.raises(fibra.InputError, match="distinct"):
+        read_csv(p)
+    p.write_text("a,b\n1\n")
+    with pytest.raises(fibra.InputError, match="line 2"):
+        read_csv(p)

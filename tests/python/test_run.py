@@ -107,7 +107,11 @@ def test_a_failed_run_returns_with_its_message(tmp_path):
     result = fibra.run(data, out=tmp_path / "f", threads=1)
     assert result.status == "failed"
     assert result.message
-    assert fibra.load_result(tmp_path / "f").status == "failed"
+    again = fibra.load_result(tmp_path / "f")
+    assert again.status == "failed"
+    # Columns of numbers are floats whatever their values (a failed run's may all be integers).
+    for name in ("load_factor", "residual", "wall_time"):
+        assert again.history.dtype[name].kind == "f", name
 
 
 def test_bad_arguments(tmp_path):
@@ -117,3 +121,59 @@ def test_bad_arguments(tmp_path):
         fibra.run(CANTILEVER, out=tmp_path / "x", progress=3)
     with pytest.raises(fibra.InputError, match="checkpoint"):
         fibra.run(CANTILEVER, out=tmp_path / "none", resume=True)
+
+
+def test_runs_from_two_threads_take_turns_and_one_stop_stops_one_run(tmp_path):
+    import concurrent.futures
+    with concurrent.futures.ThreadPoolExecutor(2) as pool:
+        stopped = pool.submit(fibra.run, CANTILEVER, out=tmp_path / "a", threads=1,
+                              progress=lambda i: i.total_increments < 2)
+        whole = pool.submit(fibra.run, CANTILEVER, out=tmp_path / "b", threads=1)
+        assert stopped.result().status == "interrupted"
+        assert whole.result().converged
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_threads_zero_is_all_cores_after_a_run_with_one(tmp_path):
+    every = fibra.run(CANTILEVER, out=tmp_path / "a", threads=0).summary["solver"]["threads"]
+    assert fibra.run(CANTILEVER, out=tmp_path / "b", threads=1).summary["solver"]["threads"] == 1
+    assert fibra.run(CANTILEVER, out=tmp_path / "c", threads=0).summary["solver"]["threads"] == every
+    assert every == os.cpu_count() or "OMP_NUM_THREADS" in os.environ
+
+
+def test_sigint_during_a_run_and_an_ignored_sigint(tmp_path):
+    def ctrl_c(info):
+        if info.total_increments == 2:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    with pytest.raises(fibra.RunInterrupted) as e:
+        fibra.run(CANTILEVER, out=tmp_path / "i", threads=1, progress=ctrl_c)
+    assert e.value.result.status == "interrupted" and len(e.value.result.history) == 3
+    assert isinstance(e.value, KeyboardInterrupt)
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        assert fibra.run(CANTILEVER, out=tmp_path / "j", threads=1, progress=ctrl_c).converged
+        assert signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def test_resume_with_the_same_case_built_in_python(tmp_path):
+    fibra.run(CANTILEVER, out=tmp_path / "r", threads=1, progress=lambda i: i.total_increments < 3)
+    same = fibra.load_case(CANTILEVER).with_values({})
+    assert fibra.run(same, out=tmp_path / "r", threads=1, resume=True).converged
+    fibra.run(same, out=tmp_path / "s", threads=1, progress=lambda i: i.total_increments < 3)
+    assert fibra.run(fibra.Case(same.to_dict()), out=tmp_path / "s", threads=1, resume=True).converged
+    changed = same.with_values({"step[0].load[0].force": [0, 0, -1000.0]})
+    fibra.run(same, out=tmp_path / "t", threads=1, progress=lambda i: i.total_increments < 3)
+    with pytest.raises(fibra.InputError, match=r"step\[0\]\.load\[0\]\.force"):
+        fibra.run(changed, out=tmp_path / "t", threads=1, resume=True)
+
+
+def test_an_empty_output_directory_name_is_refused(tmp_path):
+    with pytest.raises(fibra.InputError, match="out"):
+        fibra.run(CANTILEVER, out="", threads=1)
+    with pytest.raises(ValueError, match="threads"):
+        fibra.run(CANTILEVER, out=tmp_path / "x", threads="2")
+    with pytest.raises(ValueError, match="name"):
+        fibra.Case(fibra.load_case(CANTILEVER).to_dict(), name="")

@@ -137,7 +137,8 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                                    c.start));
   }
   // The case as read (text, file): kept in checkpoints, compared with a resumed run's.
-  const std::pair<std::string, std::string> source = case_source(c);
+  const std::pair<std::string, std::string> source =
+      options.case_text.empty() ? case_source(c) : std::make_pair(options.case_text, options.case_text_file);
   // --resume: the run goes on from the checkpoint in its output directory.
   const std::optional<Checkpoint> resumed =
       options.resume ? std::optional<Checkpoint>(load_checkpoint(c, source, options.out_dir)) : std::nullopt;

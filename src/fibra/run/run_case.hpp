@@ -23,6 +23,10 @@ struct RunOptions {
   /// Called after each converged increment, once its outputs are written (may be empty). To
   /// stop the run from it, set interrupt_flag(): the run ends as interrupted, outputs kept.
   std::function<void(const IncrementInfo&)> on_increment;
+  /// The case's text and its file name (".toml" or ".json" says the format), kept in the
+  /// checkpoints and compared on --resume; empty: the case file's text (c.file), or the case
+  /// written as TOML when it has none. A case built in Python gives the JSON it was read from.
+  std::string case_text, case_text_file;
 };
 
 /// What a run did.
