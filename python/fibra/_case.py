@@ -200,7 +200,7 @@ class Case:
 def case_keys(table=None):
     """The keys a case file (or a case dict) may hold, as the reader declares them (the tables
     of docs/case-file.md): {table: [{"name", "type", "default", "allowed", "unit", "meaning",
-    "variant", "choices"}, ...]}, tables named by their path without indices ("top", "fiber",
+    "variant", "choices", "expected"}, ...]}, tables named by their path without indices ("top", "fiber",
     "fabric.tow", "step.load", ...); with `table`, that table's list alone."""
     tables = _fibra.schema()
     if table is None:

@@ -275,6 +275,7 @@ py::dict schema() {
       d["unit"] = std::string(k->unit);
       d["meaning"] = std::string(k->meaning);
       d["variant"] = std::string(k->variant);
+      d["expected"] = std::string(k->expected);
       std::vector<std::string> choices(k->choices.begin(), k->choices.end());
       d["choices"] = choices;
       keys.append(d);

@@ -120,6 +120,42 @@ TEST(CaseSchema, UnitsAreThoseOfTheMeanings) {
   }
 }
 
+TEST(CaseSchema, RequiredKeysSayWhatTheyExpect) {
+  // A key that is always required declares what the reader's message expects of it, and a unit
+  // that message gives is the key's.
+  const std::regex unit(R"(\[(m|Pa|N|N m|N/m|rad|degrees)\])");
+  int required = 0;
+  for (const SectionSpec& s : case_schema()) {
+    for (const KeySpec& k : s.keys) {
+      if (k.default_value == "required" || k.default_value == "required, at least 1") {
+        ++required;
+        EXPECT_FALSE(k.expected.empty()) << s.name << "." << k.name;
+      }
+      const std::string expected(k.expected);
+      std::smatch m;
+      if (std::regex_search(expected, m, unit)) {
+        EXPECT_EQ(m[1].str(), k.unit) << s.name << "." << k.name;
+      }
+    }
+  }
+  EXPECT_GE(required, 25);
+}
+
+TEST(CaseSchema, AMissingKeyIsReportedWithTheSchemasText) {
+  const std::string text =
+      "[[material]]\nname = \"glass\"\npoisson = 0.2\n\n[[fiber]]\nname = \"f\"\nmaterial = \"glass\"\n"
+      "radius = 1e-4\npoints = [[0, 0, 0], [1e-3, 0, 0]]\nelements = 2\n\n[[step]]\nname = \"s\"\n";
+  try {
+    parse_case_toml(text, "case.toml");
+    FAIL() << "a material without young was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "material[0].young");
+    EXPECT_NE(std::string(e.what()).find(fmt::format("(expected {})", schema_key("material", "young").expected)),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(CaseSchema, ChoicesAreThoseAllowed) {
   // The words a string key may be are each in its Allowed text, quoted, in backticks.
   std::size_t keys = 0;

@@ -18,8 +18,8 @@ namespace fibra::case_file {
 BodySpec Reader::read_body(const Value& t, const std::string& path) const {
   check_keys(t, path, schema_keys("body"));
   BodySpec b;
-  b.name = to_name(require(t, path, "name", "a string"), join(path, "name"));
-  b.center = to_vec3(require(t, path, "center", "an array of 3 numbers [m]"), join(path, "center"));
+  b.name = to_name(require_key(t, path, "body", "name"), join(path, "name"));
+  b.center = to_vec3(require_key(t, path, "body", "center"), join(path, "center"));
   if (const Value* v = find(t, "axes")) {
     const std::string key = join(path, "axes");
     if (v->type != Value::Type::Array || v->items.size() != 3) {
@@ -69,7 +69,7 @@ BindingSpec Reader::read_binding(const Value& t, const std::string& path, std::s
   b.line = static_cast<int>(k);
   {
     const std::string key = join(path, "body");
-    const Value& v = require(t, path, "body", "a string naming a [[body]]");
+    const Value& v = require_key(t, path, "binding", "body");
     b.body = to_string(v, key);
     expect_body(b.body, v, key, bodies);
   }
@@ -204,7 +204,7 @@ BodyStepSpec Reader::read_step_body(const Value& t, const std::string& path,
   BodyStepSpec s;
   {
     const std::string key = join(path, "name");
-    const Value& v = require(t, path, "name", "a string naming a [[body]]");
+    const Value& v = require_key(t, path, "step.body", "name");
     s.name = to_string(v, key);
     expect_body(s.name, v, key, bodies);
   }

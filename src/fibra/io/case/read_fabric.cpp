@@ -73,12 +73,12 @@ FabricDirectionSpec Reader::read_fabric_direction(const Value& fabric, const std
                                                   const std::vector<MaterialSpec>& materials) const {
   const std::string base = join(path, name);
   const Value& d =
-      require(fabric, path, name, fmt::format("{} such as {{ tows = 5, spacing = 1.0e-3 }}", table_word()));
+      require_key(fabric, path, "fabric", name);
   expect_table(d, base);
   check_keys(d, base, schema_keys("fabric.direction"));
   FabricDirectionSpec s;
-  s.tows = to_int(require(d, base, "tows", "an integer >= 1"), join(base, "tows"), 1);
-  s.spacing = positive(require(d, base, "spacing", "a number > 0 [m]"), join(base, "spacing"));
+  s.tows = to_int(require_key(d, base, "fabric.direction", "tows"), join(base, "tows"), 1);
+  s.spacing = positive(require_key(d, base, "fabric.direction", "spacing"), join(base, "spacing"));
 
   const Value* own_tow = find(d, "tow");
   const Value* own_fiber = find(d, "fiber");
@@ -276,7 +276,7 @@ TowSpec Reader::read_tow(const Value& t, const std::string& path, const std::vec
   TowSpec tow;
   {
     const std::string key = join(path, "name");
-    const Value& v = require(t, path, "name", "a string");
+    const Value& v = require_key(t, path, "tow", "name");
     tow.name = to_name(v, key);
     for (std::size_t j = 0; j < earlier.size(); ++j) {
       if (earlier[j].name == tow.name) {
@@ -285,13 +285,13 @@ TowSpec Reader::read_tow(const Value& t, const std::string& path, const std::vec
     }
   }
   {
-    const Value& v = require(t, path, "direction", "\"warp\" or \"weft\"");
+    const Value& v = require_key(t, path, "tow", "direction");
     tow.direction = one_of(v, join(path, "direction"), schema_choices("tow", "direction")) == "warp" ? TowSpec::Direction::Warp
                                                                                   : TowSpec::Direction::Weft;
   }
   {
     const std::string key = join(path, "index");
-    const Value& v = require(t, path, "index", "an integer >= 0, the position among the tows of its direction");
+    const Value& v = require_key(t, path, "tow", "index");
     tow.index = to_int(v, key, 0);
     for (std::size_t j = 0; j < earlier.size(); ++j) {
       if (earlier[j].direction == tow.direction && earlier[j].index == tow.index) {
@@ -304,7 +304,7 @@ TowSpec Reader::read_tow(const Value& t, const std::string& path, const std::vec
   }
   {
     const std::string key = join(path, "fibers");
-    const Value& v = require(t, path, "fibers", "an array of fiber names");
+    const Value& v = require_key(t, path, "tow", "fibers");
     if (v.type != Value::Type::Array) {
       fail(key, fmt::format("expected an array of fiber names (strings), got {}", describe(v)), &v);
     }

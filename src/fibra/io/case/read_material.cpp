@@ -31,11 +31,11 @@ MaterialSpec Reader::read_material(const Value& t, const std::string& path) cons
     check_keys(t, path, schema_keys("material", "transverse"));
   }
 
-  m.name = to_name(require(t, path, "name", "a string"), join(path, "name"));
-  m.young = positive(require(t, path, "young", "a number > 0 [Pa]"), join(path, "young"));
+  m.name = to_name(require_key(t, path, "material", "name"), join(path, "name"));
+  m.young = positive(require_key(t, path, "material", "young"), join(path, "young"));
   const std::string poisson_key = join(path, "poisson");
   if (m.model == MaterialSpec::Model::Isotropic) {
-    const Value& v = require(t, path, "poisson", "a number in [0, 0.5)");
+    const Value& v = require_key(t, path, "material", "poisson");
     m.poisson = to_number(v, poisson_key);
     if (!(m.poisson >= 0 && m.poisson < 0.5)) {
       fail(poisson_key, fmt::format("must be in [0, 0.5) for an isotropic material, got {}", m.poisson),
@@ -45,12 +45,12 @@ MaterialSpec Reader::read_material(const Value& t, const std::string& path) cons
   }
 
   m.poisson = to_number(require(t, path, "poisson", "a number (nu_LT)"), poisson_key);
-  m.young_transverse = positive(require(t, path, "young_transverse", "a number > 0 [Pa]"),
+  m.young_transverse = positive(require_key(t, path, "material", "young_transverse"),
                                 join(path, "young_transverse"));
   m.shear_axial =
-      positive(require(t, path, "shear_axial", "a number > 0 [Pa]"), join(path, "shear_axial"));
+      positive(require_key(t, path, "material", "shear_axial"), join(path, "shear_axial"));
   const std::string nu_tt_key = join(path, "poisson_transverse");
-  const Value& nu_tt = require(t, path, "poisson_transverse", "a number in (-1, 1)");
+  const Value& nu_tt = require_key(t, path, "material", "poisson_transverse");
   m.poisson_transverse = to_number(nu_tt, nu_tt_key);
   // The normal block of the compliance matrix (axis 3 = fiber axis) is
   //   [ 1/ET     -nuTT/ET  -nuLT/EL ]
@@ -143,20 +143,20 @@ PathSpec Reader::read_path(const Value& t, const std::string& path) const {
   }
   if (const Value* v = find(table, "center")) p.center = to_vec3(*v, join(base, "center"));
   if (const Value* v = find(table, "axis")) p.axis = to_direction(*v, join(base, "axis"));
-  p.radius = positive(require(table, base, "radius", "a number > 0 [m]"), join(base, "radius"));
+  p.radius = positive(require_key(table, base, is_arc ? "fiber.arc" : "fiber.helix", "radius"), join(base, "radius"));
   if (const Value* v = find(table, "start_angle")) p.start_angle = to_number(*v, join(base, "start_angle")) * kDegree;
   if (is_arc) {
     const std::string angle_key = join(base, "angle");
-    const Value& angle = require(table, base, "angle", "a nonzero number of degrees");
+    const Value& angle = require_key(table, base, "fiber.arc", "angle");
     const double degrees = to_number(angle, angle_key);
     if (degrees == 0) fail(angle_key, "must be nonzero (the sweep of the arc, in degrees), got 0", &angle);
     p.angle = degrees * kDegree;
   } else {
     const std::string pitch_key = join(base, "pitch");
-    const Value& pitch = require(table, base, "pitch", "a number >= 0 [m per turn]");
+    const Value& pitch = require_key(table, base, "fiber.helix", "pitch");
     p.pitch = to_number(pitch, pitch_key);
     if (!(p.pitch >= 0)) fail(pitch_key, fmt::format("must be >= 0, got {}", p.pitch), &pitch);
-    p.turns = positive(require(table, base, "turns", "a number > 0"), join(base, "turns"));
+    p.turns = positive(require_key(table, base, "fiber.helix", "turns"), join(base, "turns"));
   }
   return p;
 }
@@ -165,10 +165,10 @@ FiberSpec Reader::read_fiber(const Value& t, const std::string& path,
                              const std::vector<MaterialSpec>& materials) const {
   check_keys(t, path, schema_keys("fiber"));
   FiberSpec f;
-  f.name = to_name(require(t, path, "name", "a string"), join(path, "name"));
+  f.name = to_name(require_key(t, path, "fiber", "name"), join(path, "name"));
 
   const std::string material_key = join(path, "material");
-  const Value& material = require(t, path, "material", "a string naming a [[material]]");
+  const Value& material = require_key(t, path, "fiber", "material");
   f.material = to_string(material, material_key);
   expect_material(f.material, material, material_key, materials);
 
@@ -210,7 +210,7 @@ FiberSpec Reader::read_fiber(const Value& t, const std::string& path,
   }
 
   const std::string elements_key = join(path, "elements");
-  const Value& elements = require(t, path, "elements", "an integer >= 1");
+  const Value& elements = require_key(t, path, "fiber", "elements");
   f.elements = to_int(elements, elements_key, 1);
   if (const std::string why = size_excess(fiber_size(f.elements), m_limits); !why.empty())
     fail(elements_key, fmt::format("{} elements make a model too large to run: {}", f.elements, why), &elements);

@@ -19,7 +19,7 @@ NodeRef Reader::read_node(const Value& t, const std::string& path,
                           const std::vector<FiberSpec>& fibers) const {
   NodeRef ref;
   const std::string fiber_key = join(path, "fiber");
-  const Value& fiber = require(t, path, "fiber", "a string naming a [[fiber]]");
+  const Value& fiber = require_key(t, path, "node", "fiber");
   ref.fiber = to_string(fiber, fiber_key);
   const FiberSpec* it = &expect_fiber(ref.fiber, fiber, fiber_key, fibers);
 
@@ -148,7 +148,7 @@ DisplacementSpec Reader::read_displacement(const Value& t, const std::string& pa
   DisplacementSpec d;
   d.node = read_node(t, path, fibers);
   const std::string key = join(path, "value");
-  const Value& v = require(t, path, "value", "an array of 3 components, each a number or \"free\"");
+  const Value& v = require_key(t, path, "step.displacement", "value");
   d.value = to_components(v, key);
   const bool any = std::any_of(d.value.begin(), d.value.end(), [](const auto& x) { return x.has_value(); });
   if (!any) fail(key, "all 3 components are \"free\": at least one must be a number", &v);

@@ -29,7 +29,7 @@ Case Reader::read_continued(const Value& root, const Value& start) const {
   expect_table(start, "start");
   check_keys(start, "start", schema_keys("start"));
   const Value& from_value =
-      require(start, "start", "from", "a string: the result directory (--out) of an earlier run to go on from");
+      require_key(start, "start", "start", "from");
   const std::string from = to_string(from_value, "start.from");
   namespace fs = std::filesystem;
   fs::path dir(from);

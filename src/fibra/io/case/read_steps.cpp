@@ -134,7 +134,7 @@ StepSpec Reader::read_step(const Value& t, const std::string& path, std::size_t 
 void Reader::read_steps(const Value& root, Case& c, const std::vector<FiberSpec>& all_fibers,
                         const std::vector<BodySpec>& all_bodies) const {
   const std::string fabric_word = m_json ? "a fabric object" : "a [fabric]";
-  const Value& v = require(root, "", "step", table_array_word("step"));
+  const Value& v = require_key(root, "", "top", "step");
   const std::vector<Value>& tables = to_table_array(v, "step", "step");
   if (tables.empty()) fail("step", "at least one step is required", &v);
   for (std::size_t i = 0; i < tables.size(); ++i) {

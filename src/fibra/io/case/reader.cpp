@@ -84,6 +84,17 @@ const Value& Reader::require(const Value& table, const std::string& path, std::s
   fail(join(path, key), fmt::format("missing required key (expected {})", expected), &table);
 }
 
+const Value& Reader::require_key(const Value& table, const std::string& path, std::string_view section,
+                                 std::string_view key) const {
+  const std::string_view expected = schema_key(section, key).expected;
+  if (expected.empty())
+    throw std::logic_error(fmt::format("case schema: {}.{} declares no expected value", section, key));
+  std::string text(expected);
+  if (text.starts_with("@tables")) text = table_array_word(key) + text.substr(7);
+  else if (text.starts_with("@table")) text = table_word() + text.substr(6);
+  return require(table, path, key, text);
+}
+
 double Reader::to_number(const Value& v, const std::string& key) const {
   double x = 0;
   if (v.type == Value::Type::Integer) {
@@ -311,7 +322,7 @@ Case Reader::read(const Value& root) const {
 
   // Materials.
   {
-    const Value& v = require(root, "", "material", table_array_word("material"));
+    const Value& v = require_key(root, "", "top", "material");
     const std::vector<Value>& tables = to_table_array(v, "material", "material");
     if (tables.empty()) fail("material", "at least one material is required", &v);
     for (std::size_t i = 0; i < tables.size(); ++i) {

@@ -63,6 +63,10 @@ class Reader {
 
   const Value& require(const Value& table, const std::string& path, std::string_view key,
                        std::string_view expected) const;
+  /// The required key `key` of schema table `section`: missing, the message says what the
+  /// schema expects (KeySpec::expected).
+  const Value& require_key(const Value& table, const std::string& path, std::string_view section,
+                           std::string_view key) const;
 
   // -- conversions ---------------------------------------------------------------------
 

@@ -35,6 +35,11 @@ struct KeySpec {
   bool exclusive = false;
   /// A string key that is one of a few words: the words, in the order the reader lists them.
   std::span<const std::string_view> choices = {};
+  /// A required key: what its value is, as the reader's message says when the key is missing
+  /// ("missing required key (expected a number > 0 [Pa])"). "@tables" stands for the format's
+  /// words for an array of tables ("an array of tables ([[step]])" or "an array of objects"),
+  /// "@table" for a table ("a table" or "an object").
+  std::string_view expected = {};
 
   /// Whether the key is a plain number or integer (number_default and minimum given).
   constexpr bool bounded() const { return minimum == minimum; }
