@@ -156,6 +156,21 @@ TEST(CaseSchema, AMissingKeyIsReportedWithTheSchemasText) {
   }
 }
 
+TEST(CaseSchema, FuzzDictionaryHoldsEveryKeyAndWord) {
+  // The case readers' fuzz harnesses start from every key and word of the schema.
+  std::ifstream in(std::string(FIBRA_SOURCE_DIR) + "/fuzz/case.dict");
+  ASSERT_TRUE(in) << "fuzz/case.dict";
+  std::set<std::string> tokens;
+  for (std::string line; std::getline(in, line);)
+    if (line.size() >= 2 && line.front() == '"' && line.back() == '"') tokens.insert(line.substr(1, line.size() - 2));
+  for (const SectionSpec& s : case_schema()) {
+    for (const KeySpec& k : s.keys) {
+      EXPECT_TRUE(tokens.count(std::string(k.name))) << s.name << "." << k.name;
+      for (const std::string_view word : k.choices) EXPECT_TRUE(tokens.count(std::string(word))) << s.name << "." << k.name << ": " << word;
+    }
+  }
+}
+
 TEST(CaseSchema, ChoicesAreThoseAllowed) {
   // The words a string key may be are each in its Allowed text, quoted, in backticks.
   std::size_t keys = 0;
