@@ -10,8 +10,7 @@
 #include <filesystem>
 
 #include "fibra/core/error.hpp"
-#include "fibra/io/case_reader.hpp"
-#include "fibra/io/nodes_csv.hpp"
+#include "fibra/export/result_state.hpp"
 #include "fibra/io/slice.hpp"
 #include "fibra/model/model.hpp"
 #include "fibra/model/slice_cuts.hpp"
@@ -152,20 +151,10 @@ SliceOutcome slice_result(const std::string& dir, const SliceRequest& request) {
   const int count = request.has_tow ? parse_stations(request.stations) : 0;
   std::vector<Plane> planes;
   for (const std::string& t : request.planes) planes.push_back(parse_plane(t));
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec))
-    throw InputError(dir, "(directory)",
-                            fs::exists(dir, ec) ? "not a directory: expected the output directory of `fibra run`"
-                                                : "no such directory: expected the output directory of `fibra run`");
-  const fs::path case_file = fs::path(dir) / "case.toml", nodes_file = fs::path(dir) / "nodes.csv";
-  for (const fs::path& f : {case_file, nodes_file})
-    if (!fs::is_regular_file(f, ec))
-      throw InputError(f.string(), "(file)",
-                              fmt::format("not found: `fibra slice` reads the case.toml and nodes.csv that "
-                                          "`fibra run` writes into its output directory"));
-  const Case c = read_case(case_file.string());
-  const Model model = build_model(c);
-  const VecX q = read_nodes_csv(nodes_file.string(), model);
+  const ResultState result = read_result_state(dir, "fibra slice");
+  const Case& c = result.c;
+  const Model& model = result.model;
+  const VecX& q = result.q;
   if (request.has_tow) {
     slice_tow(dir, c, model, q, request.tow, count, request.out, outcome);
     return outcome;
