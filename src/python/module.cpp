@@ -7,12 +7,12 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <omp.h>
 #include <atomic>
 #include <csignal>
 #include <cstdlib>
 #include <memory>
 #include <mutex>
-#include <omp.h>
 #include <optional>
 #include <string>
 #include <vector>
@@ -334,7 +334,8 @@ PYBIND11_MODULE(_fibra, m) {
       .def("expanded_toml", [](const CaseHandle& h) { return fibra::write_case_toml(*h.c); })
       .def("check", &check);
 
-  m.def("read_case", [](const std::string& path) { return make_handle(fibra::read_case(path)); }, py::arg("path"));
+  m.def(
+      "read_case", [](const std::string& path) { return make_handle(fibra::read_case(path)); }, py::arg("path"));
   m.def(
       "parse_case",
       [](const std::string& text, bool json, const std::string& label, const std::string& name) {

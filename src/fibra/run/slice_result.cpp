@@ -31,9 +31,9 @@ struct Plane {
 Plane parse_plane(const std::string& text) {
   auto fail = [&] {
     throw InputError("fibra slice", "--plane",
-                            fmt::format("expected AXIS=VALUE with AXIS x, y or z and VALUE a position in metres "
-                                        "(e.g. --plane x=0.5e-3), got \"{}\"",
-                                        text));
+                     fmt::format("expected AXIS=VALUE with AXIS x, y or z and VALUE a position in metres "
+                                 "(e.g. --plane x=0.5e-3), got \"{}\"",
+                                 text));
   };
   const size_t eq = text.find('=');
   if (eq == std::string::npos) fail();
@@ -45,10 +45,14 @@ Plane parse_plane(const std::string& text) {
   const std::string axis = trim(text.substr(0, eq)), value = trim(text.substr(eq + 1));
   Plane p;
   p.text = text;
-  if (axis == "x" || axis == "X") p.axis = 0;
-  else if (axis == "y" || axis == "Y") p.axis = 1;
-  else if (axis == "z" || axis == "Z") p.axis = 2;
-  else fail();
+  if (axis == "x" || axis == "X")
+    p.axis = 0;
+  else if (axis == "y" || axis == "Y")
+    p.axis = 1;
+  else if (axis == "z" || axis == "Z")
+    p.axis = 2;
+  else
+    fail();
   const char* begin = value.data();
   if (!value.empty() && value[0] == '+') ++begin;
   const auto [end, ec] = std::from_chars(begin, value.data() + value.size(), p.value);
@@ -58,9 +62,10 @@ Plane parse_plane(const std::string& text) {
 
 /// "x from A to B, y from ..., z from ... m": where the fibers' centroid lines are.
 std::string describe_bounds(const Eigen::AlignedBox3d& box) {
-  return fmt::format("the fibers' centroid lines span x from {:.4g} to {:.4g}, y from {:.4g} to {:.4g}, "
-                     "z from {:.4g} to {:.4g} m",
-                     box.min().x(), box.max().x(), box.min().y(), box.max().y(), box.min().z(), box.max().z());
+  return fmt::format(
+      "the fibers' centroid lines span x from {:.4g} to {:.4g}, y from {:.4g} to {:.4g}, "
+      "z from {:.4g} to {:.4g} m",
+      box.min().x(), box.max().x(), box.min().y(), box.max().y(), box.min().z(), box.max().z());
 }
 
 /// The plane's position in a file name: 6 significant digits, no "-0".
@@ -78,24 +83,24 @@ int parse_stations(const std::string& text) {
   const auto [at, ec] = std::from_chars(text.data(), end, n);
   if (text.empty() || ec != std::errc() || at != end || n < 1 || n > 999)
     throw InputError("fibra slice", "--stations",
-                            fmt::format("expected the number of slices across the tow, an integer from 1 to 999 "
-                                        "(e.g. --stations 5), got \"{}\"",
-                                        text));
+                     fmt::format("expected the number of slices across the tow, an integer from 1 to 999 "
+                                 "(e.g. --stations 5), got \"{}\"",
+                                 text));
   return n;
 }
 
 /// The slices of one tow at successive stations along it: RESULT/slices/tow_NAME_01 ... (or
 /// STEM_01 ...), only that tow's fibers, all at the same scale and frame.
-void slice_tow(const std::string& dir, const Case& c, const Model& model, const VecX& q,
-               const std::string& tow_name, int count, const std::string& out, SliceOutcome& outcome) {
+void slice_tow(const std::string& dir, const Case& c, const Model& model, const VecX& q, const std::string& tow_name,
+               int count, const std::string& out, SliceOutcome& outcome) {
   const auto tow = std::find_if(c.tows.begin(), c.tows.end(), [&](const TowSpec& t) { return t.name == tow_name; });
   if (tow == c.tows.end()) {
     std::vector<std::string> names;
     for (const TowSpec& t : c.tows) names.push_back(t.name);
     throw InputError("fibra slice", "--tow",
-                            names.empty() ? fmt::format("no tow named \"{}\": the case has no tows", tow_name)
-                                          : fmt::format("no tow named \"{}\"; the case's tows: {}", tow_name,
-                                                        fmt::format("{}", fmt::join(names, ", "))));
+                     names.empty() ? fmt::format("no tow named \"{}\": the case has no tows", tow_name)
+                                   : fmt::format("no tow named \"{}\"; the case's tows: {}", tow_name,
+                                                 fmt::format("{}", fmt::join(names, ", "))));
   }
   const int index = static_cast<int>(tow - c.tows.begin());
   TowStations stations;
@@ -115,12 +120,13 @@ void slice_tow(const std::string& dir, const Case& c, const Model& model, const 
   }
   const std::string title = c.title.empty() ? fs::path(dir).filename().string() : c.title;
   const int width = std::max(2, static_cast<int>(std::to_string(count).size()));
-  const std::string base = out.empty() ? (fs::path(dir) / "slices" / ("tow_" + step_file_stem(tow_name))).string()
-                                       : out;
+  const std::string base =
+      out.empty() ? (fs::path(dir) / "slices" / ("tow_" + step_file_stem(tow_name))).string() : out;
   auto component = [](double x) { return std::abs(x) < 5e-5 ? 0.0 : x; };  // no "-0.0000"
-  outcome.lines.push_back(fmt::format("tow {}: {} stations from {:.6g} to {:.6g} mm along its direction ({:.4f}, {:.4f}, {:.4f})\n", tow_name,
-             count, 1e3 * stations.start, 1e3 * stations.end, component(stations.direction.x()),
-             component(stations.direction.y()), component(stations.direction.z())));
+  outcome.lines.push_back(
+      fmt::format("tow {}: {} stations from {:.6g} to {:.6g} mm along its direction ({:.4f}, {:.4f}, {:.4f})\n",
+                  tow_name, count, 1e3 * stations.start, 1e3 * stations.end, component(stations.direction.x()),
+                  component(stations.direction.y()), component(stations.direction.z())));
   for (int k = 0; k < count; ++k) {
     const SlicePlane& plane = stations.planes[k];
     const std::string stem = fmt::format("{}_{:0{}d}", base, k + 1, width);
@@ -142,10 +148,10 @@ SliceOutcome slice_result(const std::string& dir, const SliceRequest& request) {
     throw InputError("fibra slice", "--tow", "give either --plane or --tow with --stations, not both");
   if (request.planes.empty() && !request.has_tow && !request.has_stations)
     throw InputError("fibra slice", "--plane",
-                            "expected --plane AXIS=VALUE (e.g. --plane x=0.5e-3) or --tow NAME --stations N");
+                     "expected --plane AXIS=VALUE (e.g. --plane x=0.5e-3) or --tow NAME --stations N");
   if (request.has_tow && !request.has_stations)
     throw InputError("fibra slice", "--stations",
-                            "--tow needs --stations N, the number of slices across the tow (e.g. --stations 5)");
+                     "--tow needs --stations N, the number of slices across the tow (e.g. --stations 5)");
   if (!request.has_tow && request.has_stations)
     throw InputError("fibra slice", "--stations", "--stations counts the slices of a tow: give --tow NAME too");
   const int count = request.has_tow ? parse_stations(request.stations) : 0;
@@ -186,6 +192,5 @@ SliceOutcome slice_result(const std::string& dir, const SliceRequest& request) {
   }
   return outcome;
 }
-
 
 }  // namespace fibra
