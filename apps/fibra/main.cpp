@@ -194,11 +194,7 @@ int generate(const std::string& path, std::string out) {
 int plot(const std::vector<std::string>& dirs, const std::string& out) {
   const fibra::CurveOverlay overlay = fibra::overlay_curves(dirs, out);
   for (const std::string& note : overlay.notes) fmt::print("note: {}\n", note);
-  const fibra::PlotOutcome outcome = fibra::plot_curves(overlay.figures);
-  if (!outcome.ok())
-    throw fibra::RunError(fmt::format("no plots: {} (the figures need Python 3 with matplotlib: /usr/bin/python3 "
-                                      "by default, or set FIBRA_PYTHON)",
-                                      outcome.error));
+  fibra::draw_curve_overlay(overlay);
   for (const fibra::CurveFigure& f : overlay.figures)
     fmt::print("step {} ({}, {} run{}): {}.png, {}.svg, {}.json\n", f.step, f.kind, f.runs.size(),
                f.runs.size() == 1 ? "" : "s", f.stem, f.stem, f.stem);

@@ -24,7 +24,6 @@
 #include "fibra/io/case/schema.hpp"
 #include "fibra/io/case_reader.hpp"
 #include "fibra/io/case_writer.hpp"
-#include "fibra/io/curve_plots.hpp"
 #include "fibra/io/result_curves.hpp"
 #include "fibra/model/model.hpp"
 #include "fibra/run/resolve.hpp"
@@ -222,17 +221,13 @@ py::dict export_result(const std::string& dir, const std::string& out, const std
 
 py::dict plot(const std::vector<std::string>& dirs, const std::string& out) {
   const fibra::CurveOverlay overlay = fibra::overlay_curves(dirs, out);
-  fibra::PlotOutcome outcome;
+  std::vector<std::string> files;
   {
     py::gil_scoped_release release;
-    outcome = fibra::plot_curves(overlay.figures);
+    files = fibra::draw_curve_overlay(overlay);
   }
-  if (!outcome.ok())
-    throw fibra::RunError("no plots: " + outcome.error +
-                          " (the figures need Python 3 with matplotlib: /usr/bin/python3 by default, or set "
-                          "FIBRA_PYTHON)");
   py::dict d;
-  d["files"] = outcome.files;
+  d["files"] = files;
   d["notes"] = overlay.notes;
   return d;
 }
@@ -262,21 +257,17 @@ py::dict schema() {
   py::dict tables;
   for (const fibra::case_file::SectionSpec& section : fibra::case_file::case_schema()) {
     py::list keys;
-    for (const std::string_view name : fibra::case_file::schema_keys(section.name)) {
-      const fibra::case_file::KeySpec* k = nullptr;
-      for (const fibra::case_file::KeySpec& candidate : section.keys)
-        if (candidate.name == name) k = &candidate;
-      if (k == nullptr) continue;  // a node reference's keys, listed in the table "node"
+    for (const fibra::case_file::KeySpec& k : section.keys) {
       py::dict d;
-      d["name"] = std::string(k->name);
-      d["type"] = std::string(k->type);
-      d["default"] = std::string(k->default_value);
-      d["allowed"] = std::string(k->allowed);
-      d["unit"] = std::string(k->unit);
-      d["meaning"] = std::string(k->meaning);
-      d["variant"] = std::string(k->variant);
-      d["expected"] = std::string(k->expected);
-      std::vector<std::string> choices(k->choices.begin(), k->choices.end());
+      d["name"] = std::string(k.name);
+      d["type"] = std::string(k.type);
+      d["default"] = std::string(k.default_value);
+      d["allowed"] = std::string(k.allowed);
+      d["unit"] = std::string(k.unit);
+      d["meaning"] = std::string(k.meaning);
+      d["variant"] = std::string(k.variant);
+      d["expected"] = std::string(k.expected);
+      std::vector<std::string> choices(k.choices.begin(), k.choices.end());
       d["choices"] = choices;
       keys.append(d);
     }

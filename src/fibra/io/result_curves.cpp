@@ -198,4 +198,14 @@ CurveOverlay overlay_curves(const std::vector<std::string>& dirs, const std::str
   return overlay;
 }
 
+std::vector<std::string> draw_curve_overlay(const CurveOverlay& overlay) {
+  const PlotOutcome outcome = plot_curves(overlay.figures);
+  if (!outcome.ok())
+    throw RunError(
+        fmt::format("no plots: {} (the figures need Python 3 with matplotlib: /usr/bin/python3 by "
+                    "default, or set FIBRA_PYTHON)",
+                    outcome.error));
+  return outcome.files;
+}
+
 }  // namespace fibra

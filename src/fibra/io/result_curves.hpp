@@ -46,4 +46,9 @@ struct CurveOverlay {
 /// that share no step).
 CurveOverlay overlay_curves(const std::vector<std::string>& dirs, const std::string& out);
 
+/// Draws the figures of `overlay` (plot_curves) and returns the files written; throws RunError
+/// naming what failed and what the figures need when they cannot be drawn (`fibra plot` and
+/// the Python module's fibra.plot).
+std::vector<std::string> draw_curve_overlay(const CurveOverlay& overlay);
+
 }  // namespace fibra
