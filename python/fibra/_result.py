@@ -10,13 +10,7 @@ import xml.etree.ElementTree as ElementTree
 import numpy as np
 
 from . import _fibra
-
-
-def _input_error(file, key, message):
-    error = _fibra.InputError(f"{file}: {key}: {message}")
-    error.file = file
-    error.key = key
-    return error
+from ._case import _input_error
 
 
 # The columns of fibra's CSV files that hold counts (the others that hold numbers are floats).
@@ -88,13 +82,11 @@ def _records(items):
     dtype = []
     for n in names:
         values = [f.get(n) for f in flats]
+        numbers = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
         if all(isinstance(v, str) for v in values):
             dtype.append((n, f"U{max(1, max(len(v) for v in values))}"))
-        elif all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values) and all(
-                isinstance(v, int) for v in values):
-            dtype.append((n, np.int64))
-        elif all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
-            dtype.append((n, np.float64))
+        elif numbers:
+            dtype.append((n, np.int64 if all(isinstance(v, int) for v in values) else np.float64))
         else:
             dtype.append((n, object))
     out = np.empty(len(flats), dtype=dtype)
@@ -241,14 +233,18 @@ class Result:
             return out
         return self._cached("fibers", read)
 
+    def _saved(self, collection, index):
+        """The mesh of increment `index` of a ParaView collection (fibers.pvd, lines.pvd, ...)."""
+        import meshio  # python3-meshio
+        path = self.out / collection
+        files = [d.get("file") for d in ElementTree.parse(path).getroot().iter("DataSet")]
+        if not files:
+            raise _input_error(str(path), "(file)", "lists no increment")
+        return meshio.read(self.out / files[index])
+
     def _fibers_from_lines(self):
         """The fibers of the last increment lines.pvd lists (centroid lines with g1, g2)."""
-        import meshio  # python3-meshio
-        collection = self.out / "lines.pvd"
-        files = [d.get("file") for d in ElementTree.parse(collection).getroot().iter("DataSet")]
-        if not files:
-            raise _input_error(str(collection), "(file)", "lists no increment")
-        mesh = meshio.read(self.out / files[-1])
+        mesh = self._saved("lines.pvd", -1)
         names = self.case._handle.fibers
         fiber, node = mesh.point_data["fiber"].ravel(), mesh.point_data["node"].ravel()
         out = {}
@@ -267,11 +263,7 @@ class Result:
             return np.empty(0, dtype=[("x", float), ("y", float), ("z", float), ("gap", float),
                                       ("normal_force", float), ("friction", float, 3), ("normal", float, 3),
                                       ("slip", np.int32), ("zone", np.int32)])
-        files = [d.get("file") for d in ElementTree.parse(collection).getroot().iter("DataSet")]
-        if not files:
-            raise _input_error(str(collection), "(file)", "lists no increment")
-        import meshio  # python3-meshio
-        mesh = meshio.read(self.out / files[index])
+        mesh = self._saved("contacts.pvd", index)
         data = mesh.point_data
         fields = [("x", float), ("y", float), ("z", float)]
         for name, values in data.items():
