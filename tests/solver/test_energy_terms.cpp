@@ -407,15 +407,57 @@ TEST(EnergyTerms, Drag) {
   DragTerm term(model, &bodies);
   std::mt19937 rng(2);
   const VecX anchor = random_state(model, rng, 1.0);
-  for (double axial : {1.0, 0.01}) {
-    term.set(1e3, anchor, 100.0, axial);
+  // Isotropic, weak along the fibers, and with the positions and bodies released (the end of
+  // a relax step or a settled test level: only the section vectors held).
+  for (const auto& [axial, position] : {std::pair{1.0, 1.0}, std::pair{0.01, 1.0}, std::pair{0.01, 0.0}}) {
+    term.set(1e3, anchor, 100.0, axial, position);
     VecX q = random_state(model, rng, 1.0);
     for (const Body& b : model.bodies)
       for (int k = 0; k < 6; ++k) q[b.first_dof + k] = anchor[b.first_dof + k] + 0.1 * random_unit(rng)[k % 3];
     std::vector<char> fixed(model.num_dofs(), 0);
     fixed[9 * 1 + 2] = 1;
-    expect_derivatives(term, model, q, 1.0, 1e3, "axial weight " + std::to_string(axial), fixed);
+    expect_derivatives(term, model, q, 1.0, 1e3,
+                       "axial weight " + std::to_string(axial) + ", position weight " + std::to_string(position), fixed);
   }
+}
+
+// The drag's force by parts: the positions and bodies, the section vectors, and all of them (their
+// squares add up); with the positions released the drag pulls on the section vectors only, as
+// it did with them held.
+TEST(EnergyTerms, DragForceByParts) {
+  const Case c = parse_case_toml(kBodies, "bodies.toml");
+  const Model model = build_model(c);
+  BodySystem bodies(c, model);
+  DragTerm term(model, &bodies);
+  std::mt19937 rng(5);
+  const VecX anchor = random_state(model, rng, 1.0);
+  VecX q = random_state(model, rng, 1.0);
+  for (const Body& b : model.bodies)
+    for (int k = 0; k < 6; ++k) q[b.first_dof + k] = anchor[b.first_dof + k] + 0.1 * random_unit(rng)[k % 3];
+  VecX scale = VecX::Ones(q.size());
+  for (Index d = 0; d < model.node_dofs; ++d)
+    if (d % kNodeDofs >= 3) scale[d] = 7.0;
+  term.set(1e3, anchor, 100.0, 0.5);
+  const double all = term.force_norm(q, scale), positions = term.force_norm(q, scale, DragPart::Positions),
+               sections = term.force_norm(q, scale, DragPart::Sections);
+  EXPECT_GT(positions, 0.0);
+  EXPECT_GT(sections, 0.0);
+  EXPECT_NEAR(all * all, positions * positions + sections * sections, 1e-12 * all * all);
+  // Its gradient by hand: positions P (x - a) c, bodies c (and c s^2 on rotations), sections c w r^2.
+  VecX g = VecX::Zero(q.size());
+  AssemblyTarget t;
+  t.gradient = &g;
+  term.assemble(q, t);
+  double pos2 = 0.0;
+  for (Index n = 0; n < model.num_nodes(); ++n) pos2 += scale.segment<3>(kNodeDofs * n).cwiseProduct(g.segment<3>(kNodeDofs * n)).squaredNorm();
+  pos2 += g.tail(q.size() - model.node_dofs).squaredNorm();
+  EXPECT_NEAR(positions, std::sqrt(pos2), 1e-12 * positions);
+
+  term.set(1e3, anchor, 100.0, 0.5, 0.0);
+  EXPECT_EQ(term.force_norm(q, scale, DragPart::Positions), 0.0);
+  EXPECT_NEAR(term.force_norm(q, scale, DragPart::Sections), sections, 1e-12 * sections);
+  EXPECT_NEAR(term.force_norm(q, scale), sections, 1e-12 * sections);
+  EXPECT_EQ(term.position_weight(), 0.0);
 }
 
 // The problem sums exactly its terms.

@@ -178,7 +178,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   const bool dragged = solver.has_contact() && std::any_of(c.steps.begin(), c.steps.end(), [](const StepSpec& st) {
                          return st.kind == StepSpec::Kind::Weave || st.is_proximal();
                        });
-  if (dragged) columns.insert(columns.end(), {"relax:drag_residual", "relax:drag"});
+  if (dragged) columns.insert(columns.end(), {"relax:drag_residual", "relax:spin_residual", "relax:drag"});
   // Woven samples: the fabric report (model/fabric_report.hpp) per increment, O(nodes).
   const bool fabric = !c.tows.empty();
   if (fabric) columns.insert(columns.end(), {"fabric:warp_crimp", "fabric:weft_crimp", "fabric:thickness"});
@@ -377,7 +377,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                         info.increment_time - cs.detection_time});
     }
     if (bodies) row.extra.insert(row.extra.end(), {double(info.binding_updates), info.binding_violation});
-    if (dragged) row.extra.insert(row.extra.end(), {info.relax_residual, info.drag});
+    if (dragged) row.extra.insert(row.extra.end(), {info.relax_residual, info.spin_residual, info.drag});
     if (rep) row.extra.insert(row.extra.end(), {rep->warp_crimp, rep->weft_crimp, rep->thickness});
     if (rep && info.step_end) {
       const StepSpec::Kind kind = st.kind;

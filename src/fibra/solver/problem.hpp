@@ -55,16 +55,21 @@ class Problem {
   std::vector<ContactResponse> contact_responses(const VecX& q) const { return m_contact.responses(q); }
 
   /// Drag (weave, relax and test steps), DragTerm::set: c = 0 removes it.
-  void set_drag(double c, const VecX& anchor, double director_weight = 1.0, double axial_weight = 1.0) {
-    m_drag.set(c, anchor, director_weight, axial_weight);
+  void set_drag(double c, const VecX& anchor, double director_weight = 1.0, double axial_weight = 1.0,
+                double position_weight = 1.0) {
+    m_drag.set(c, anchor, director_weight, axial_weight, position_weight);
   }
   /// Norm of the drag's force at q, each dof's component multiplied by `scale` (e.g. 1/r on
-  /// section vectors, making their generalized forces forces); 0 without drag.
-  double drag_force_norm(const VecX& q, const VecX& scale) const { return m_drag.force_norm(q, scale); }
+  /// section vectors, making their generalized forces forces) over the dofs of `part`; 0 without
+  /// drag.
+  double drag_force_norm(const VecX& q, const VecX& scale, DragPart part = DragPart::All) const {
+    return m_drag.force_norm(q, scale, part);
+  }
   const VecX& drag_anchor() const { return m_drag.anchor(); }  ///< anchor of the drag
   double drag() const { return m_drag.stiffness(); }            ///< drag stiffness per node [N/m]
   double drag_director_weight() const { return m_drag.director_weight(); }  ///< set_drag's director_weight
   double drag_axial_weight() const { return m_drag.axial_weight(); }        ///< set_drag's axial_weight
+  double drag_position_weight() const { return m_drag.position_weight(); }  ///< set_drag's position_weight
   const FrictionParams& friction() const { return m_contact.friction(); }   ///< set_contacts' friction
   /// P u for node `node`'s position (the drag's force per unit stiffness, see DragTerm::set).
   Vec3 drag_projected(Index node, const Vec3& u) const { return m_drag.projected(node, u); }

@@ -41,7 +41,13 @@ struct IncrementInfo {
   int binding_updates = 0;        ///< augmented-Lagrangian multiplier updates
   int limited_steps = 0;          ///< Newton steps scaled down to the step limit in this increment
   double binding_violation = 0;   ///< largest binding condition |g| at the accepted state [m]
-  double relax_residual = 0;      ///< relax and test steps: the drag's force, relative to the reference force
+  /// Relax and test steps: the drag's force on the nodes' positions and the bodies at the end
+  /// of the increment's dragged solve, relative to the reference force (what ends a relax step
+  /// and settles a test level; such an increment is then solved again without it).
+  double relax_residual = 0;
+  /// Relax and test steps: the drag's force on the section vectors at the end of the increment
+  /// (the fibers' spin about their axes, held by the drag), relative to the reference force.
+  double spin_residual = 0;
   double drag = 0;                ///< drag stiffness per node the increment was solved with [N/m] (0 without drag)
 };
 
@@ -128,6 +134,15 @@ class StaticSolver {
   /// Weaving: +1 / -1 when the contact normal from fiber fa towards fiber fb must be +z / -z
   /// (fibers of crossing tows, side from the weave matrix), 0 otherwise.
   int weave_side(int fa, int fb) const;
+  /// The end of a relax step or a settled test level (an increment whose drag force on the
+  /// positions is below the step's tolerance, its normals settled): the same increment (load
+  /// factor `lambda`, its start and its drag's anchor) solved on from its solution with the drag
+  /// on the nodes' positions and the bodies released, only the section vectors still held
+  /// (DragTerm::set's position_weight 0), so that the fabric's forces balance to the Newton
+  /// tolerance. Returns true and keeps the new state when it converges; otherwise puts back
+  /// the increment's state, contacts, bodies and statistics. `iterations`: its Newton
+  /// iterations either way.
+  bool release_positions(int step, double lambda, int& iterations);
   /// Newton, then augmented-Lagrangian updates of the binding multipliers until the binding
   /// conditions hold (each update followed by Newton again).
   bool equilibrium(std::vector<double>& history, int& iterations, double& residual);
@@ -176,6 +191,7 @@ class StaticSolver {
   int m_fresh_cg = -1;            // iterations of the first CG solve after the last factorization (-1: none yet)
   VecX m_rhs;                     // right-hand side of the Newton solve
   PcgWorkspace m_pcg;             // conjugate gradients' work vectors
+  bool m_sections_only_drag = false;  // the drag holds only the section vectors (release_positions)
   bool m_relax_settling = false;  // relax steps: the drag is negligible, normals iterated to their fixed point
   double m_reference_force = 0;  // reference force of the last Newton iteration [N]
   double m_newton_tolerance = 0;  // residual tolerance of the current Newton solves (relative; >= residual_tolerance)

@@ -12,6 +12,11 @@
 
 namespace fibra {
 
+/// The dofs a drag force is measured on: all of them; the nodes' positions and the bodies (the
+/// forces a fabric's edges feel); the section vectors (the fibers' spin about their own axes
+/// and the sections' deformation, which turn no edge force).
+enum class DragPart { All, Positions, Sections };
+
 /// Drag of every node (and body) towards an anchor state.
 class DragTerm final : public EnergyTerm {
  public:
@@ -21,17 +26,21 @@ class DragTerm final : public EnergyTerm {
   void pattern_changed(const BlockPattern& pattern) override;
   double assemble(const VecX& q, const AssemblyTarget& target) override;
 
-  /// Energy c/2 sum over nodes of (x0 - a)^T P (x0 - a) + w r^2 (|g1 - a1|^2 + |g2 - a2|^2)
-  /// towards `anchor`, w = `director_weight`, P = I - (1 - `axial_weight`) t t^T with t the
-  /// fiber's unit tangent at the node in the anchor state; bodies c/2 |dR|^2 + c s^2/2 |dtheta|^2
-  /// (s the body's size); c = 0 removes it.
-  void set(double c, const VecX& anchor, double director_weight, double axial_weight);
+  /// Energy c/2 sum over nodes of p (x0 - a)^T P (x0 - a) + w r^2 (|g1 - a1|^2 + |g2 - a2|^2)
+  /// towards `anchor`, w = `director_weight`, p = `position_weight`, P = I - (1 -
+  /// `axial_weight`) t t^T with t the fiber's unit tangent at the node in the anchor state;
+  /// bodies p (c/2 |dR|^2 + c s^2/2 |dtheta|^2) (s the body's size); c = 0 removes it. With
+  /// p = 0 only the section vectors are held: the drag exerts no force on the nodes' positions
+  /// and the bodies, only moments that turn the sections.
+  void set(double c, const VecX& anchor, double director_weight, double axial_weight, double position_weight = 1.0);
   double stiffness() const { return m_c; }             ///< c, per node [N/m]
   const VecX& anchor() const { return m_anchor; }      ///< the anchor state
   double director_weight() const { return m_director; }  ///< set()'s director_weight
   double axial_weight() const { return m_axial; }        ///< set()'s axial_weight
-  /// Norm of the drag's force at q, each dof's component multiplied by `scale`; 0 without drag.
-  double force_norm(const VecX& q, const VecX& scale) const;
+  double position_weight() const { return m_position; }  ///< set()'s position_weight
+  /// Norm of the drag's force at q over the dofs of `part`, each dof's component multiplied by
+  /// `scale`; 0 without drag.
+  double force_norm(const VecX& q, const VecX& scale, DragPart part = DragPart::All) const;
   /// P u for node `node`'s position (the drag's force per unit stiffness).
   Vec3 projected(Index node, const Vec3& u) const {
     if (m_axial == 1.0 || m_axis.empty()) return u;
@@ -46,6 +55,7 @@ class DragTerm final : public EnergyTerm {
   double m_c = 0;
   double m_director = 1.0;
   double m_axial = 1.0;
+  double m_position = 1.0;
   VecX m_anchor;
   std::vector<Vec3> m_axis;       // unit tangent per node in the anchor state
   std::vector<double> m_node_r2;  // squared section radius per node
