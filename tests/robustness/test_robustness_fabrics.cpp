@@ -25,7 +25,8 @@ INSTANTIATE_TEST_SUITE_P(Robustness, FabricBiaxial,
                                            BiaxialCase{"fabric_tight_biaxial", 1.0, true, 60},
                                            BiaxialCase{"fabric_loose_biaxial", 1.0, true, 60},
                                            BiaxialCase{"fabric_carbon_biaxial", 1.0, true, 60},
-                                           BiaxialCase{"fabric_plain_width_grip", 1.0, true, 60}),
+                                           BiaxialCase{"fabric_plain_width_grip", 1.0, true, 60},
+                                           BiaxialCase{"fabric_paper_tows_averaged", 1.0, true, 60}),
                          [](const auto& p) { return std::string(p.param.name); });
 
 // ---------------------------------------------------------------------------------------------

@@ -1573,11 +1573,8 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
           relaxed = loaded && m_relax_residual <= st.tolerance && m_normals_settled;
           m_relax_settling = loaded && m_relax_residual <= st.tolerance;
         }
-        if (test ? level_settled : relaxed) {
-          int released = 0;
-          release_positions(step, lambda + step_dl, released);
-          iterations += released;
-        }
+        int released = 0;  // Newton iterations of the release (not counted by the drag's rule below)
+        if (test ? level_settled : relaxed) release_positions(step, lambda + step_dl, released);
         // Easy increments: the drag falls, faster the easier they were. Once its force is
         // below the tolerance and only the normals are left to settle, it stays: a weaker drag
         // would only risk a failure (the 480-fiber relax, at a drag force of 8.3e-5, went
@@ -1585,6 +1582,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         const double fall = m_relax_settling ? 1.0 : iterations <= 12 ? 0.25 : iterations <= 30 ? 0.5 : 1.0;
         m_relax_drag = std::max(std::max(fall * m_relax_drag, relax_min), std::min(failed_floor, relax_max));
         failed_floor *= m_relax_residual > 100.0 * st.tolerance ? fall : 0.7;
+        iterations += released;
       }
       if (!relax && !weave_step && step_dl > 0.0) {
         last_motion = m_q - saved;

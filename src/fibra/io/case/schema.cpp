@@ -348,7 +348,7 @@ constexpr KeySpec kStep[] = {
      .type = "number",
      .default_value = "`1e-4`",
      .allowed = "(0, 1); relax, biaxial and shear steps only",
-     .meaning = "The drag force on the nodes' positions and the bodies, relative to the reference force, below which a relax step ends and a test level becomes a point of its curves; each such state is then solved once more with that drag released, an equilibrium of the forces to `residual_tolerance` (the fibers' spin about their own axes stays held, `docs/theory/fabric.md`). A looser one is faster: `2e-3` on the 480-fiber plain weave's equibiaxial test gives edge forces within 0.9 % of those at `1e-3` in two thirds of the time (`docs/performance.md`, \"Test levels\")."},
+     .meaning = "The drag force on the nodes' positions and the bodies, relative to the reference force, below which a relax step ends and a test level becomes a point of its curves; each such state is then solved on with that drag released, an equilibrium of the forces to `[solver] residual_tolerance` at a relax step's end and to a hundredth of this tolerance (or `residual_tolerance`, when looser) at a test level (the fibers' spin about their own axes stays held, `docs/theory/fabric.md`). A looser one is faster: `2e-3` on the 480-fiber plain weave's equibiaxial test gives edge forces within 0.9 % of those at `1e-3` in two thirds of the time (`docs/performance.md`, \"Test levels\")."},
 };
 
 constexpr KeySpec kStepLoad[] = {
