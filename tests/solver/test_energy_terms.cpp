@@ -400,6 +400,15 @@ TEST(EnergyTerms, Bindings) {
   }
 }
 
+// A random state of the nodes, the bodies moved a little from `anchor` (their rotations stay
+// small, where the drag's rotation terms are meant).
+VecX dragged_state(const Model& model, const VecX& anchor, std::mt19937& rng) {
+  VecX q = random_state(model, rng, 1.0);
+  for (const Body& b : model.bodies)
+    for (int k = 0; k < 6; ++k) q[b.first_dof + k] = anchor[b.first_dof + k] + 0.1 * random_unit(rng)[k % 3];
+  return q;
+}
+
 TEST(EnergyTerms, Drag) {
   const Case c = parse_case_toml(kBodies, "bodies.toml");
   const Model model = build_model(c);
@@ -411,9 +420,7 @@ TEST(EnergyTerms, Drag) {
   // a relax step or a settled test level: only the section vectors held).
   for (const auto& [axial, position] : {std::pair{1.0, 1.0}, std::pair{0.01, 1.0}, std::pair{0.01, 0.0}}) {
     term.set(1e3, anchor, 100.0, axial, position);
-    VecX q = random_state(model, rng, 1.0);
-    for (const Body& b : model.bodies)
-      for (int k = 0; k < 6; ++k) q[b.first_dof + k] = anchor[b.first_dof + k] + 0.1 * random_unit(rng)[k % 3];
+    const VecX q = dragged_state(model, anchor, rng);
     std::vector<char> fixed(model.num_dofs(), 0);
     fixed[9 * 1 + 2] = 1;
     expect_derivatives(term, model, q, 1.0, 1e3,
@@ -431,9 +438,7 @@ TEST(EnergyTerms, DragForceByParts) {
   DragTerm term(model, &bodies);
   std::mt19937 rng(5);
   const VecX anchor = random_state(model, rng, 1.0);
-  VecX q = random_state(model, rng, 1.0);
-  for (const Body& b : model.bodies)
-    for (int k = 0; k < 6; ++k) q[b.first_dof + k] = anchor[b.first_dof + k] + 0.1 * random_unit(rng)[k % 3];
+  const VecX q = dragged_state(model, anchor, rng);
   VecX scale = VecX::Ones(q.size());
   for (Index d = 0; d < model.node_dofs; ++d)
     if (d % kNodeDofs >= 3) scale[d] = 7.0;
