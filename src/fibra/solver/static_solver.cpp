@@ -168,7 +168,7 @@ int StaticSolver::weave_side(int fa, int fb) const {
 }
 
 bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>& history, int& iterations,
-                                   double& residual) {
+                                   double& residual, bool positions_released) {
   apply(step, lambda);
   m_contact_stats = ContactStats{};
   m_binding_updates = 0;
@@ -195,7 +195,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   // that holds every node (docs/theory/fabric.md, "Drag along the fibers").
   m_problem->set_drag(weave ? m_case.solver.method.weave_drag * k0 : relax ? m_relax_drag : 0.0, m_drag_anchor,
                       weave || relax ? kDirectorDrag : 1.0, weave || relax ? m_case.solver.method.drag_axial : 1.0,
-                      m_sections_only_drag ? 0.0 : 1.0);
+                      positions_released ? 0.0 : 1.0);
 
   // METHOD §4: (1) contact elements, repeated while the set changes; (2) normals, repeated
   // while they turn; (3) Newton on the rest. A zone that penetrates too deep gets a stiffer
@@ -1279,11 +1279,9 @@ bool StaticSolver::release_positions(int step, double lambda, int& iterations) {
                axial = m_problem->drag_axial_weight();
   const VecX drag_anchor = m_problem->drag_anchor();
   // The same increment (its start, its drag's anchor), from its solution with the drag.
-  m_sections_only_drag = true;
   std::vector<double> history;
   double residual = 0.0;
-  const bool ok = solve_increment(step, lambda, history, iterations, residual);
-  m_sections_only_drag = false;
+  const bool ok = solve_increment(step, lambda, history, iterations, residual, true);
   // The factorizations of this solve had no drag on the positions: none preconditions the next
   // step's solves (a checkpoint records the drag's weights without it, so a resumed run could
   // not make it again).
@@ -1551,16 +1549,11 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       if (relax) {
         // Drag force left at the end of the increment (scaled like the residual), relative to
         // the reference force, on the nodes' positions and the bodies: the forces the fabric's
-        // edges feel. What the drag holds besides is the fibers' spin about their own axes,
-        // which only friction resists, and which crept on long after the fabric's forces had
-        // settled: on the 4 x 4 twill 3/1 of the corpus the drag's force on the section vectors
-        // was 10 to 100 times that on the positions over the whole relax (5.9e-3 against
-        // 1.8e-4 at its first increment at lambda = 1, 1.0e-4 against 1.3e-6 at its end), and
-        // a relax measured on every dof ended only once the spins stopped (after 180
-        // increments, beyond the test's budget; 16 with this measure). The spins stay held;
-        // the increment that ends a relax step or settles a test level is solved once more
-        // with the positions released (release_positions), an equilibrium of the forces to the
-        // Newton tolerance.
+        // edges feel. Its force on the section vectors holds the fibers' spin about their own
+        // axes, which only friction resists and which creeps on after the forces have settled
+        // (docs/theory/fabric.md, "The spins stay held"): it ends nothing. The increment that
+        // ends a relax step or settles a test level is then solved on with the positions
+        // released (release_positions).
         m_relax_residual =
             m_problem->drag_force_norm(m_q, m_force_scale, DragPart::Positions) / std::max(m_reference_force, 1e-300);
         if (m_loading) m_load_residual = m_relax_residual;

@@ -113,7 +113,11 @@ class StaticSolver {
   struct Program;  // resolved loads and displacements per step
   /// A step's loads and prescribed values (m_program) from the case and the current state.
   void begin_step(int step);
-  bool solve_increment(int step, double lambda, std::vector<double>& history, int& iterations, double& residual);
+  /// Solves the increment to load factor `lambda` of step `step` (contact loops, Newton,
+  /// bindings). `positions_released`: its drag holds only the section vectors
+  /// (release_positions).
+  bool solve_increment(int step, double lambda, std::vector<double>& history, int& iterations, double& residual,
+                       bool positions_released = false);
   bool newton(std::vector<double>& history, int& iterations, double& residual);
   /// Developers' trace of a shifted factorization (FIBRA_DEBUG_NEWTON): the indefinite local
   /// Hessians and the tangent's softest mode, by inverse iteration with the current factor.
@@ -191,7 +195,6 @@ class StaticSolver {
   int m_fresh_cg = -1;            // iterations of the first CG solve after the last factorization (-1: none yet)
   VecX m_rhs;                     // right-hand side of the Newton solve
   PcgWorkspace m_pcg;             // conjugate gradients' work vectors
-  bool m_sections_only_drag = false;  // the drag holds only the section vectors (release_positions)
   bool m_relax_settling = false;  // relax steps: the drag is negligible, normals iterated to their fixed point
   double m_reference_force = 0;  // reference force of the last Newton iteration [N]
   double m_newton_tolerance = 0;  // residual tolerance of the current Newton solves (relative; >= residual_tolerance)
