@@ -106,7 +106,7 @@ int run(const std::string& path, std::string out, int threads, bool progress_lin
     for (double v : r.result.residual_history) fmt::print(stderr, " {:.3e}", v);
     fmt::print(stderr, "\n");
   }
-  if (r.result.status == fibra::RunResult::Status::Failed)
+  if (r.result.status == fibra::RunResult::Status::Failed && r.result.diagnosis.made)
     fmt::print(stderr, "  diagnosis: {}\n", r.result.diagnosis.text());
   fmt::print(stderr, "outputs of every converged increment kept in {}/ (see summary.json)\n", out);
   print_results(out, r);

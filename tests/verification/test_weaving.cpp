@@ -80,10 +80,33 @@ TEST(Weaving, PlainWeaveStepSeparatesTheTowsInThePatternsOrder) {
   const FabricReport rep = fabric_report(s.c, s.model, s.q, nullptr, nullptr);
   std::printf("weaving: warp crimp %.5f, weft crimp %.5f, thickness %.4g m, largest penetration ratio %.4f\n",
               rep.warp_crimp, rep.weft_crimp, rep.thickness, last.contact.max_penetration_ratio);
-  EXPECT_LT(last.contact.max_penetration_ratio, 0.1);
+  // The step ends within the penetration cap (contact.max_penetration, 0.05 r by default).
+  EXPECT_TRUE(last.step_end);
+  EXPECT_LE(last.contact.max_penetration_ratio, 0.05);
   EXPECT_GT(rep.warp_crimp, 0.005);
   EXPECT_GT(rep.weft_crimp, 0.005);
   EXPECT_GT(rep.thickness, 0.25e-3);
+}
+
+// The same weave asked in one increment: the tows, released from their full depth at once,
+// are still deep in each other at its end, and the step goes on at full load, one increment
+// more (twice the step's increments), then fails saying how deep they are and what to change
+// (every increment converged: nothing stalled, so no stall diagnosis).
+TEST(Weaving, WeaveThatEndsDeepFailsNamingTheDepthAndTheFix) {
+  std::string text = kPlain;
+  const size_t at = text.find("increments = 10");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 15, "increments = 1");
+  const test::Solved s = test::solve_toml(text, "plain_one_increment.toml");
+  ASSERT_EQ(s.result.status, RunResult::Status::Failed);
+  EXPECT_EQ(s.increments.size(), 2u);
+  for (const IncrementInfo& info : s.increments) EXPECT_FALSE(info.step_end);
+  EXPECT_GT(s.increments.back().contact.max_penetration_ratio, 0.05);
+  EXPECT_NE(s.result.message.find("step \"weave\": after 2 increments"), std::string::npos) << s.result.message;
+  EXPECT_NE(s.result.message.find("times the penetration cap"), std::string::npos) << s.result.message;
+  EXPECT_NE(s.result.message.find("raise the step's `increments`"), std::string::npos) << s.result.message;
+  EXPECT_FALSE(s.result.diagnosis.made);
+  EXPECT_EQ(s.result.diagnosis.text(), "");
 }
 
 // Plain and 2/1 twill woven from the same 3 x 3 tows of seven fibers (weave step alone,

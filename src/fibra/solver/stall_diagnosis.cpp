@@ -103,6 +103,7 @@ std::string StallDiagnosis::tangent_name() const {
 
 std::string StallDiagnosis::text() const {
   std::string s;
+  if (!made) return s;
   if (!refusal.empty()) s = fmt::format("the contact loop refused the last attempt: {}. Besides, ", refusal);
   const std::string mode = softest_mode.empty() ? std::string("(not found)") : softest_mode;
   switch (tangent) {

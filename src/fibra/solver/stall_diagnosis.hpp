@@ -24,6 +24,9 @@ struct StallDiagnosis {
   /// determined (no factorization could be made).
   enum class Tangent { Indefinite, Singular, Definite, Unknown };
   Tangent tangent = Tangent::Unknown;
+  /// Whether a stalled increment was diagnosed: a run can fail with every increment converged
+  /// (a weave whose tows stay too deep in each other), and then there is nothing to diagnose.
+  bool made = false;
   double softest_stiffness = 0;  ///< v.Hv of the unit softest mode (dofs weighed into lengths) [N/m]
   double bending_stiffness = 0;  ///< scale: the softest fiber bent as a whole cantilever, 3 E I / L^3 [N/m]
   std::string softest_mode;      ///< describe_motion of the softest mode
@@ -32,7 +35,7 @@ struct StallDiagnosis {
   /// not settle), or empty when it did not: Newton then failed.
   std::string refusal;
   /// The diagnosis as sentences for the failure report: what moves without resisting, where
-  /// the attempt went, and what the user can change.
+  /// the attempt went, and what the user can change; empty when none was made.
   std::string text() const;
   /// "indefinite", "singular", "definite" or "unknown".
   std::string tangent_name() const;

@@ -366,8 +366,11 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     bool fresh_penetrate = false;
     for (size_t k = 0; !weave && !fresh_penetrate && k < contacts.size(); ++k)
       fresh_penetrate = contacts[k].fresh && !(m_contact->penetration_ratio({contacts[k]}, m_q) <= 0.0);
-    const double deepest = weave ? 0.0 : m_contact->penetration_ratio(contacts, m_q);
-    const double current_deepest = weave ? 0.0 : m_contact->penetration_ratio(m_problem->contacts(), m_q);
+    const double deepest = m_contact->penetration_ratio(contacts, m_q);
+    const double current_deepest = m_contact->penetration_ratio(m_problem->contacts(), m_q);
+    // Weaving: how deep the tows still are in each other, in the solved set or in the fresh one
+    // (the step ends at full load only once both are within the cap; run()).
+    if (weave) m_weave_deepest = std::max(deepest, current_deepest);
     if (lagged && (fresh_penetrate || deepest > 1.0 || raised > 0)) m_normals_settled = false;
     // A test level's settling increment: its state is a point of the curves once the fresh
     // elements do not penetrate and the deepest penetration is within method.test_penetration_slack
@@ -380,7 +383,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     const double cap = lagged ? 2.0 : test_settling ? 1.0 + m_case.solver.method.test_penetration_slack : 1.0;
     const bool same = weave || ((lagged || !fresh_penetrate) && deepest <= cap);
     const bool deferred = lagged || (test_settling && m_case.solver.method.test_penetration_slack > 0.0);
-    if (debug_newton() && !weave) {
+    if (debug_newton()) {
       size_t fresh = 0;
       for (const ContactElement& c : contacts) fresh += c.fresh ? 1 : 0;
       fmt::print(stderr, " detection: {} elements ({} fresh{}), deepest {:.3f} of the cap ({:.3f} in the solved set), {} penalties raised{}\n",
@@ -576,6 +579,7 @@ double StaticSolver::softest_mode(int iterations, VecX& mode) {
 
 StallDiagnosis StaticSolver::diagnose_stall(const VecX& failed) {
   StallDiagnosis diag;
+  diag.made = true;
   const std::vector<char>& fixed = m_problem->fixed();
   const Index n = m_q.size();
   VecX motion = failed - m_q;
@@ -1426,7 +1430,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       m_relax_settling = false;
       failed_state.resize(0);
       failed_refusal.clear();
-      relaxed = !relax;
+      relaxed = !relax && !(weave_step && m_contact);
     }
     while (lambda < 1.0 - 1e-12 || !relaxed) {
       // A test level that would leave less than a quarter of itself for a last level takes it
@@ -1577,6 +1581,14 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         failed_floor *= m_relax_residual > 100.0 * st.tolerance ? fall : 0.7;
         iterations += released;
       }
+      // Weave steps (METHOD §6: the tows are pushed apart until no interpenetration remains):
+      // once the pattern's offsets are released and the loads applied, the step goes on at full
+      // load, each increment from the last one's state, until the crossing tows are within the
+      // penetration cap; at most as many increments again as the step asked for. The plain
+      // weave of the paper's 12-fiber tows ended its ten increments 0.50 r deep (10 x the cap),
+      // the deepest element still falling by 20-50 % per increment (docs/theory/fabric.md,
+      // "Weaving").
+      if (weave_step && m_contact) relaxed = lambda + step_dl >= 1.0 - 1e-12 && m_weave_deepest <= 1.0;
       if (!relax && !weave_step && step_dl > 0.0) {
         last_motion = m_q - saved;
         last_dl = step_dl;
@@ -1647,6 +1659,15 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       }
       observer(info, m_q);
       t_increment = std::chrono::steady_clock::now();
+      if (weave_step && m_contact && lambda >= 1.0 && !relaxed && done >= 2 * st.increments) {
+        failed_state.resize(0);  // every increment converged: nothing stalled to diagnose
+        return fail(1.0, {}, fmt::format(
+            "step \"{}\": after {} increments (twice the step's `increments`) the woven tows are still {:.3g} times "
+            "the penetration cap (contact.max_penetration) deep in each other; the weave needs smaller increments "
+            "(raise the step's `increments`) or tows that fit between each other (fabric.tow width and thickness "
+            "against the spacing)",
+            st.name, done, m_weave_deepest));
+      }
     }
   }
   m_stats.time_assembly = m_problem->times().assembly;
