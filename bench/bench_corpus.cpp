@@ -17,6 +17,7 @@
 
 #include "fibra/io/case_reader.hpp"
 #include "fibra/model/model.hpp"
+#include "fibra/run/resolve.hpp"
 #include "fibra/solver/static_solver.hpp"
 
 namespace {
@@ -41,8 +42,8 @@ struct Outcome {
 
 Outcome solve(const std::filesystem::path& file) {
   const Case c = read_case(file.string());
-  const Model model = build_model(c);
-  StaticSolver solver(c, model);
+  ResolvedCase resolved = resolve_case(c);
+  StaticSolver solver(c, resolved.model, std::move(resolved.bodies));
   const RunResult r = solver.run([](const IncrementInfo&, const VecX&) {});
   return {r.status == RunResult::Status::Converged, solver.stats().iterations, solver.stats().increments};
 }

@@ -22,6 +22,7 @@
 
 #include "fibra/io/case_reader.hpp"
 #include "fibra/model/model.hpp"
+#include "fibra/run/resolve.hpp"
 #include "fibra/solver/static_solver.hpp"
 #include "robustness/known_failures.hpp"
 #include "verification/verification_support.hpp"
@@ -156,11 +157,12 @@ inline CaseRun solve_file(const std::string& name, double budget_seconds) {
   s.name = name;
   s.budget = budget_seconds;
   s.c = read_case(case_path(name));
-  s.model = build_model(s.c);
+  ResolvedCase r = resolve_case(s.c);
+  s.model = r.model;
   const bool verbose = std::getenv("FIBRA_VERBOSE") != nullptr;
   const auto t0 = std::chrono::steady_clock::now();
   {
-    StaticSolver solver(s.c, s.model);
+    StaticSolver solver(s.c, r.model, std::move(r.bodies));
     s.reaction_columns = solver.reaction_columns();
     if (verbose) solver.set_progress([](const std::string& line) { std::printf("  %s\n", line.c_str()); });
     WallTimeBudget watch(budget_seconds);

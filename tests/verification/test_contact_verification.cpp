@@ -31,6 +31,7 @@
 #include "fibra/contact/contact_manager.hpp"
 #include "fibra/io/case_reader.hpp"
 #include "fibra/model/model.hpp"
+#include "fibra/run/resolve.hpp"
 #include "fibra/run/run_case.hpp"
 #include "fibra/solver/static_solver.hpp"
 
@@ -134,8 +135,9 @@ ContactSolved solve_contact(const std::string& toml, bool verbose = std::getenv(
   const auto t0 = std::chrono::steady_clock::now();
   ContactSolved s;
   s.c = parse_case_toml(toml, "contact.toml");
-  s.model = build_model(s.c);
-  StaticSolver solver(s.c, s.model);
+  ResolvedCase r = resolve_case(s.c);
+  s.model = r.model;
+  StaticSolver solver(s.c, r.model, std::move(r.bodies));
   s.reaction_columns = solver.reaction_columns();
   if (verbose) solver.set_progress([](const std::string& line) { std::printf("  %s\n", line.c_str()); });
   s.result = solver.run([&](const IncrementInfo& info, const VecX& q) {

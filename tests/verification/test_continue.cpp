@@ -20,6 +20,7 @@
 #include "fibra/io/case_reader.hpp"
 #include "fibra/io/case_writer.hpp"
 #include "fibra/model/model.hpp"
+#include "fibra/run/resolve.hpp"
 #include "fibra/run/run_case.hpp"
 #include "fibra/solver/solver_state.hpp"
 #include "support/example_files.hpp"
@@ -385,8 +386,8 @@ TEST(ContinueExamples, PaperTestsReadAgainstTheirBase) {
     fs::create_directories(dir / "state");
     std::ofstream(dir / "case.toml") << write_case_toml(c);
     const Case as_run = read_case((dir / "case.toml").string());
-    const Model same = build_model(as_run);
-    StaticSolver solver(as_run, same);
+    ResolvedCase same = resolve_case(as_run);
+    StaticSolver solver(as_run, same.model, std::move(same.bodies));
     write_state_file((dir / "state" / "relax.bin").string(), solver.save_state("relax", 2));
     for (const char* test : {"_biaxial", "_biaxial_half", "_shear"}) {
       const fs::path file = examples / (std::string(base) + test + ".toml");

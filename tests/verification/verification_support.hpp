@@ -14,6 +14,7 @@
 
 #include "fibra/io/case_reader.hpp"
 #include "fibra/model/model.hpp"
+#include "fibra/run/resolve.hpp"
 #include "fibra/solver/static_solver.hpp"
 
 namespace fibra::test {
@@ -55,8 +56,9 @@ inline Solved solve_toml(const std::string& toml, const std::string& label = "ve
   Solved s;
   s.c = parse_case_toml(toml, label);
   if (edit) edit(s.c);
-  s.model = build_model(s.c);
-  StaticSolver solver(s.c, s.model);
+  ResolvedCase r = resolve_case(s.c);
+  s.model = r.model;
+  StaticSolver solver(s.c, r.model, std::move(r.bodies));
   s.result = solver.run([&](const IncrementInfo& info, const VecX& q) {
     s.increments.push_back(info);
     if (info.step_end) {

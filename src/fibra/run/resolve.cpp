@@ -96,21 +96,20 @@ void check_start(const BodySystem* bodies, const Model& model, const SolverState
 
 }  // namespace
 
-ResolvedCase resolve_case(const Case& c) {
-  ResolvedCase r{build_model(c), std::nullopt};
-  resolve_nodes(c, r.model);
+ResolvedCase::ResolvedCase(const Case& c) : model(build_model(c)) {
+  resolve_nodes(c, model);
   // The bindings: bodies, members and grips, resolved against the model's geometry (a bound
   // node's section vectors, members that define a mean rotation) as the body system is built.
-  std::optional<BodySystem> bodies;
-  if (!r.model.bodies.empty()) bodies.emplace(c, r.model);
-  resolve_step_bodies(c, r.model);
+  if (!model.bodies.empty()) bodies = std::make_unique<BodySystem>(c, model);
+  resolve_step_bodies(c, model);
   if (!c.start.empty()) {
-    r.start = read_state_file(c.start_state);
-    check_start(bodies ? &*bodies : nullptr, r.model, *r.start, c.start_state);
+    start = read_state_file(c.start_state);
+    check_start(bodies.get(), model, *start, c.start_state);
   }
-  resolve_fabric_steps(c, r.model, r.start);
-  return r;
+  resolve_fabric_steps(c, model, start);
 }
+
+ResolvedCase resolve_case(const Case& c) { return ResolvedCase(c); }
 
 void check_start_state(const Case& c, const Model& model, const SolverState& s, const std::string& file) {
   std::optional<BodySystem> bodies;

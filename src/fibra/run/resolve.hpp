@@ -7,23 +7,33 @@
 /// case and builds no solver, and a run that starts does not stop on an input error an hour
 /// later (a shear step's conditions, say, once the weaving is done). The solver takes a
 /// resolved case and raises no input error.
+#include <memory>
 #include <optional>
 #include <string>
 
+#include "fibra/body/bodies.hpp"
 #include "fibra/model/case.hpp"
 #include "fibra/model/model.hpp"
 #include "fibra/solver/solver_state.hpp"
 
 namespace fibra {
 
-/// A case whose references are resolved: its model, and the state its [start] goes on from.
+/// A case whose references are resolved: its model, its body system, and the state its [start]
+/// goes on from. The body system refers to `model`, so a resolved case stays where
+/// resolve_case built it (not copied nor moved); the solver takes the body system
+/// (StaticSolver(c, model, std::move(bodies))).
 struct ResolvedCase {
+  explicit ResolvedCase(const Case& c);
+  ResolvedCase(const ResolvedCase&) = delete;
+  ResolvedCase& operator=(const ResolvedCase&) = delete;
+
   Model model;
-  std::optional<SolverState> start;  ///< the [start] state, checked against the model
+  std::unique_ptr<BodySystem> bodies;  ///< the bindings resolved against the model; null without bodies
+  std::optional<SolverState> start;    ///< the [start] state, checked against the model
 };
 
-/// Builds the model and checks every reference and condition of the case against it; throws
-/// InputError (file, key, what was expected) on the first that fails.
+/// Builds the model and its body system and checks every reference and condition of the case
+/// against them; throws InputError (file, key, what was expected) on the first that fails.
 ResolvedCase resolve_case(const Case& c);
 
 /// Checks that `state`, read from `file`, belongs to the model of `c` (check_state_fits, and

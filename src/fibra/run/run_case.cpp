@@ -146,9 +146,9 @@ RunReport run_case(const Case& c, const RunOptions& options) {
       (std::filesystem::path(options.out_dir.empty() ? "." : options.out_dir) / "state" / "checkpoint.bin").string();
   // An output directory that cannot be written stops the run before anything is computed.
   prepare_output_dir(options.out_dir, output_subdirs(c));
-  const ResolvedCase resolved = resolve_case(c);
+  ResolvedCase resolved = resolve_case(c);
   const Model& model = resolved.model;
-  StaticSolver solver(c, model);
+  StaticSolver solver(c, model, std::move(resolved.bodies));
   if (options.progress) solver.set_progress(options.progress);
   if (resumed) {
     check_state_fits(resumed->state, model, solver.bodies() ? solver.bodies()->num_bindings() : 0, checkpoint_file);

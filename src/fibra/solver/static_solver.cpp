@@ -49,12 +49,13 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }
 }  // namespace
 
-StaticSolver::StaticSolver(const Case& c, const Model& model)
-    : m_case(c), m_model(model),
-      m_bodies(model.bodies.empty() ? nullptr : std::make_unique<BodySystem>(c, model)),
+StaticSolver::StaticSolver(const Case& c, const Model& model, std::unique_ptr<BodySystem> bodies)
+    : m_case(c), m_model(model), m_bodies(std::move(bodies)),
       m_problem(std::make_unique<Problem>(model, m_bodies.get())),
       m_linear(make_linear_solver(c.solver.linear_solver, c.solver.method.ordering)), m_program(std::make_unique<Program>()),
       m_q(model.reference) {
+  if ((m_bodies == nullptr) != model.bodies.empty())
+    throw std::logic_error("StaticSolver: the body system does not match the model (resolve_case builds it)");
   m_linear->set_krylov_precision(krylov_precision_from(c.solver.krylov_precision));
   const Index n = model.num_dofs();
   m_program->force_start = m_program->force_end = VecX::Zero(n);

@@ -71,8 +71,9 @@ std::atomic<bool>& interrupt_flag();
 class StaticSolver {
  public:
   /// Sets up the run of a resolved case (resolve_case: every reference of `c` found in
-  /// `model`, every input error raised there); an unresolved one is a logic error.
-  StaticSolver(const Case& c, const Model& model);
+  /// `model`, the bindings resolved into `bodies`, every input error raised there; `bodies`
+  /// null when the model has none); an unresolved one is a logic error.
+  StaticSolver(const Case& c, const Model& model, std::unique_ptr<BodySystem> bodies);
   ~StaticSolver();
 
   /// Solves every step; calls `observer` after each converged increment.
