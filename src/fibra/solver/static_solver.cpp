@@ -1588,10 +1588,10 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       // Weave steps (METHOD §6: the tows are pushed apart until no interpenetration remains):
       // once the pattern's offsets are released and the loads applied, the step goes on at full
       // load, each increment from the last one's state, until the crossing tows are within the
-      // penetration cap; at most as many increments again as the step asked for. The plain
-      // weave of the paper's 12-fiber tows ended its ten increments 0.50 r deep (10 x the cap),
-      // the deepest element still falling by 20-50 % per increment (docs/theory/fabric.md,
-      // "Weaving").
+      // penetration cap; at most twice the step's increments in all (below). The plain weave of
+      // the paper's 12-fiber tows ended its ten increments 0.50 r deep, 10 times the cap, and
+      // two increments more bring it within (docs/theory/fabric.md, "The weave ends with the
+      // tows apart").
       if (weave_step && m_contact) relaxed = lambda + step_dl >= 1.0 - 1e-12 && m_weave_deepest <= 1.0;
       if (!relax && !weave_step && step_dl > 0.0) {
         last_motion = m_q - saved;
