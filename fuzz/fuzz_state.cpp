@@ -21,8 +21,9 @@ namespace {
 
 struct Target {
   fibra::Case c = fibra::read_case(FIBRA_SOURCE_DIR "/examples/woven_sample/woven_sample.toml");
-  fibra::Model model = fibra::build_model(c);
-  fibra::StaticSolver solver{c, model};
+  fibra::ResolvedCase resolved{c};
+  const fibra::Model& model = resolved.model;
+  fibra::StaticSolver solver{c, model, std::move(resolved.bodies)};
 };
 
 Target& target() {
