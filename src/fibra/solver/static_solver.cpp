@@ -367,14 +367,8 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     bool fresh_penetrate = false;
     for (size_t k = 0; !weave && !fresh_penetrate && k < contacts.size(); ++k)
       fresh_penetrate = contacts[k].fresh && !(m_contact->penetration_ratio({contacts[k]}, m_q) <= 0.0);
-    const double deepest = m_contact->penetration_ratio(contacts, m_q);
-    const double current_deepest = m_contact->penetration_ratio(m_problem->contacts(), m_q);
-    // Weaving: how deep the tows still are in each other in the solved set (the step ends at
-    // full load once it is within the cap; run()). A fresh detection's particles, laid out
-    // between the solved ones, can measure deeper where nothing raises their zones' penalty: on
-    // the 480-fiber twill it stayed beyond the cap for four increments at full load while the
-    // solved set went from 0.049 r to 0.046 r; the relax step takes such elements in.
-    if (weave) m_weave_deepest = current_deepest;
+    const double deepest = weave ? 0.0 : m_contact->penetration_ratio(contacts, m_q);
+    const double current_deepest = weave ? 0.0 : m_contact->penetration_ratio(m_problem->contacts(), m_q);
     if (lagged && (fresh_penetrate || deepest > 1.0 || raised > 0)) m_normals_settled = false;
     // A test level's settling increment: its state is a point of the curves once the fresh
     // elements do not penetrate and the deepest penetration is within method.test_penetration_slack
@@ -387,7 +381,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     const double cap = lagged ? 2.0 : test_settling ? 1.0 + m_case.solver.method.test_penetration_slack : 1.0;
     const bool same = weave || ((lagged || !fresh_penetrate) && deepest <= cap);
     const bool deferred = lagged || (test_settling && m_case.solver.method.test_penetration_slack > 0.0);
-    if (debug_newton()) {
+    if (debug_newton() && !weave) {
       size_t fresh = 0;
       for (const ContactElement& c : contacts) fresh += c.fresh ? 1 : 0;
       fmt::print(stderr, " detection: {} elements ({} fresh{}), deepest {:.3f} of the cap ({:.3f} in the solved set), {} penalties raised{}\n",
@@ -1591,8 +1585,13 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       // penetration cap; at most twice the step's increments in all (below). The plain weave of
       // the paper's 12-fiber tows ended its ten increments 0.50 r deep, 10 times the cap, and
       // two increments more bring it within (docs/theory/fabric.md, "The weave ends with the
-      // tows apart").
-      if (weave_step && m_contact) relaxed = lambda + step_dl >= 1.0 - 1e-12 && m_weave_deepest <= 1.0;
+      // tows apart"). Measured on the contact set the increment solved (its statistics): a fresh
+      // detection's particles, laid out between the solved ones, can measure deeper where
+      // nothing raises their zones' penalty (on the 480-fiber twill beyond the cap for four
+      // increments at full load while the solved set went from 0.049 r to 0.046 r); the relax
+      // step takes such elements in.
+      const double weave_depth = m_contact ? m_contact_stats.max_penetration_ratio / m_contact->spec().max_penetration : 0.0;
+      if (weave_step && m_contact) relaxed = lambda + step_dl >= 1.0 - 1e-12 && weave_depth <= 1.0;
       if (!relax && !weave_step && step_dl > 0.0) {
         last_motion = m_q - saved;
         last_dl = step_dl;
@@ -1670,7 +1669,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
             "the penetration cap (contact.max_penetration) deep in each other; the weave needs smaller increments "
             "(raise the step's `increments`) or tows that fit between each other (fabric.tow width and thickness "
             "against the spacing)",
-            st.name, done, m_weave_deepest));
+            st.name, done, weave_depth));
       }
     }
   }

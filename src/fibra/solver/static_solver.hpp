@@ -186,7 +186,6 @@ class StaticSolver {
   double m_max_step = 0;      // largest nodal motion per Newton iteration [m]; 0 = no limit
   std::vector<std::pair<int, int>> m_fiber_tow;  // per fiber: (0 warp / 1 weft / -1 none, tow index)
   double m_weave_depth = -1;     // penetration between crossing tows at the weave step's start [m]
-  double m_weave_deepest = 0;    // weave steps: deepest penetration at the last increment's end, of the cap
   double m_relax_drag = 0;       // relax steps: drag stiffness per node of the next increment [N/m]
   double m_test_drag = 0;        // drag that applied the last test level, of this run or its start's [N/m]
   bool m_normals_settled = true;  // the last increment's normals and friction cones were a fixed point
