@@ -77,10 +77,6 @@ inline constexpr KnownFailure kKnownFailures[] = {
      "the relaxed plain weave carries a shear force, 0.34 % of the largest edge force (x-force of the held edge.y+), "
      "and the curves at +5 and -5 degrees differ by 10 % of the largest shear force: the generator packs each tow's "
      "3 fibers one above two, so x -> -x, z -> -z maps the sample onto itself at the tows' scale only"},
-    {"fabric_plain_cycle",
-     "friction shows no hysteresis: brought back from 1 % the unloading forces are above the loading ones at the "
-     "same strain (24.977 / 24.987 N against 24.950 / 24.962 N at 0.75 %, warp / weft), every level an equilibrium "
-     "to the Newton tolerance"},
 };
 
 /// The mark of case `name`, or null.
