@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <string>
 
 #include "fibra/core/error.hpp"
@@ -125,6 +126,7 @@ Checkpoint small_checkpoint() {
   p.failed_refusal = "a refusal";
   p.force_start = VecX::Constant(18, 2.0);
   p.relax_drag = 123.0;
+  p.settling_residual = 3.5e-3;
   p.reuse_factor = true;
   p.krylov_budget = 40;
   p.stats.iterations = 99;
@@ -158,6 +160,7 @@ TEST_F(StateCounts, ACheckpointReadsBackWhole) {
   EXPECT_EQ(c.progress.failed_refusal, "a refusal");
   EXPECT_EQ(c.progress.force_start, written.progress.force_start);
   EXPECT_EQ(c.progress.relax_drag, 123.0);
+  EXPECT_EQ(c.progress.settling_residual, 3.5e-3);
   EXPECT_TRUE(c.progress.reuse_factor);
   EXPECT_EQ(c.progress.krylov_budget, 40);
   EXPECT_EQ(c.progress.stats.iterations, 99);
@@ -243,6 +246,32 @@ TEST_F(StateCounts, OlderVersionsAreRead) {
   EXPECT_EQ(s1.q, small_state().q);
   // A version-2 file cut short: named, as a version-3 one is.
   EXPECT_NE(read_error(m_dir, v2.substr(0, v2.size() / 2)).find("ends early"), std::string::npos);
+}
+
+// A version-3 checkpoint (no settling residual) is read, and resumes as before the field: the
+// last settling increment's residual unknown (infinite). Made from a version-4 one by cutting
+// the field's 8 bytes (found by its value).
+TEST_F(StateCounts, VersionThreeCheckpointsAreRead) {
+  Checkpoint written = small_checkpoint();
+  written.progress.factor = FactorSource{};
+  write_checkpoint_file((m_dir / "checkpoint.bin").string(), written);
+  std::string v3 = read_bytes(m_dir / "checkpoint.bin");
+  const double field = 3.5e-3;
+  const std::string pattern(reinterpret_cast<const char*>(&field), 8);
+  const std::size_t at = v3.find(pattern);
+  ASSERT_NE(at, std::string::npos);
+  ASSERT_EQ(v3.find(pattern, at + 1), std::string::npos);
+  v3.erase(at, 8);
+  const std::uint32_t three = 3;
+  v3.replace(12, 4, reinterpret_cast<const char*>(&three), 4);
+  seal_state_bytes(v3);
+  std::ofstream(m_dir / "v3.bin", std::ios::binary | std::ios::trunc) << v3;
+  const Checkpoint c = read_checkpoint_file((m_dir / "v3.bin").string());
+  EXPECT_EQ(c.progress.settling_residual, std::numeric_limits<double>::infinity());
+  EXPECT_EQ(c.progress.relax_drag, 123.0);
+  EXPECT_EQ(c.progress.detection_memory, written.progress.detection_memory);
+  EXPECT_FALSE(c.progress.factor.valid);
+  EXPECT_EQ(c.case_text, written.case_text);
 }
 
 }  // namespace

@@ -23,7 +23,7 @@ namespace {
 // mark, and (from version 3) the CRC-32 of every byte before it. A truncated file is shorter
 // than its length, a damaged one fails its checksum.
 constexpr char kMagic[] = "fibra state\n";
-constexpr std::uint32_t kVersion = 3;  // 2: test_drag; 3: kind, length, checksum, checkpoints
+constexpr std::uint32_t kVersion = 4;  // 2: test_drag; 3: kind, length, checksum, checkpoints; 4: settling_residual
 constexpr char kEnd[] = "end of state\n";
 constexpr std::size_t kMagicSize = sizeof(kMagic) - 1;
 constexpr std::size_t kEndSize = sizeof(kEnd) - 1;
@@ -299,6 +299,7 @@ void put_progress(Out& o, const SolverProgress& p) {
     o.put(static_cast<std::uint64_t>(keys.size()));
     o.bytes(keys.data(), keys.size() * sizeof(std::uint64_t));
   }
+  o.put(p.settling_residual);
   const FactorSource& f = p.factor;
   o.put(static_cast<std::uint8_t>(f.valid));
   if (!f.valid) return;
@@ -321,7 +322,7 @@ void put_progress(Out& o, const SolverProgress& p) {
   o.put(f.shift);
 }
 
-SolverProgress get_progress(In& in, const ModelFingerprint& model, Index nodes) {
+SolverProgress get_progress(In& in, const ModelFingerprint& model, Index nodes, std::uint32_t version) {
   const std::uint64_t dofs = static_cast<std::uint64_t>(std::max<std::int64_t>(model.dofs, 0));
   auto flag = [&in]() { return in.get<std::uint8_t>() != 0; };
   // A vector of the model's dofs, or none.
@@ -358,10 +359,12 @@ SolverProgress get_progress(In& in, const ModelFingerprint& model, Index nodes) 
     keys.resize(in.count(std::uint64_t{1} << 32, 8));
     in.read(keys.data(), keys.size() * sizeof(std::uint64_t));
   }
+  if (version >= 4) p.settling_residual = in.get<double>();
   if (p.step < 0 || p.total < 0 || p.done < 0 || p.attempts < 0 || !(p.lambda >= 0.0 && p.lambda <= 1.0) ||
       !(p.dl >= 0.0 && p.dl <= 1.0) || p.force_start.size() != model.dofs || p.iteration_factor < 1 ||
       p.iteration_factor > 4 || !(p.last_dl >= 0.0 && p.last_dl <= 1.0) ||
-      (p.last_dl > 0.0 && p.last_motion.size() != model.dofs) || !std::isfinite(p.relax_drag) || p.relax_drag < 0.0)
+      (p.last_dl > 0.0 && p.last_motion.size() != model.dofs) || !std::isfinite(p.relax_drag) || p.relax_drag < 0.0 ||
+      !(p.settling_residual >= 0.0))
     in.bad("its progress within the step is out of range: the file is corrupt");
   FactorSource& f = p.factor;
   f.valid = flag();
@@ -497,7 +500,7 @@ Checkpoint read_checkpoint_file(const std::string& path) {
   c.state = get_state(in, version);
   const Index nodes = static_cast<Index>(
       std::max<std::int64_t>(c.state.model.dofs - 6 * std::max<std::int64_t>(c.state.model.bodies, 0), 0) / 9);
-  c.progress = get_progress(in, c.state.model, nodes);
+  c.progress = get_progress(in, c.state.model, nodes, version);
   c.run = in.text(std::uint64_t{1} << 32);
   c.case_text = in.text(std::uint64_t{1} << 32);
   c.case_file = in.text();

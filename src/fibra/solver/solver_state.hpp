@@ -12,6 +12,7 @@
 /// Both are versioned, carry their own length and a CRC-32 of their bytes: a truncated,
 /// damaged or foreign file is refused with a message naming it, never read as a wrong state.
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <string>
 #include <utility>
@@ -103,6 +104,9 @@ struct SolverProgress {
   int done = 0, attempts = 0, level_failures = 0;
   bool level_settled = true, relaxed = false, uncuttable = false;
   double failed_floor = 0, failed_first = -1, failed_dl = 0;
+  /// Relax steps: the residual with the updated normals and cones that the step's last settling
+  /// increment ended with (infinite before the first); a creep that does not die out lowers the drag.
+  double settling_residual = std::numeric_limits<double>::infinity();
   VecX failed_state;       ///< the last failed attempt's state (for a stall's diagnosis)
   std::string failed_refusal;
   VecX force_start;        ///< the step's loads at its start (force_end is the state's)
@@ -130,7 +134,7 @@ struct Checkpoint {
 /// Writes `state` to `path` (write_file_atomic: through a temporary file renamed into place;
 /// throws RunError).
 void write_state_file(const std::string& path, const SolverState& state);
-/// Reads a step's state file (versions 1 to 3); throws InputError naming `path` if it is
+/// Reads a step's state file (versions 1 to 4); throws InputError naming `path` if it is
 /// missing, truncated, damaged, a checkpoint, or not a state file of a version this fibra reads.
 SolverState read_state_file(const std::string& path);
 /// Writes a checkpoint to `path` atomically (throws RunError).

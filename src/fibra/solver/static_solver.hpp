@@ -197,6 +197,7 @@ class StaticSolver {
   VecX m_rhs;                     // right-hand side of the Newton solve
   PcgWorkspace m_pcg;             // conjugate gradients' work vectors
   bool m_relax_settling = false;  // relax steps: the drag is negligible, normals iterated to their fixed point
+  double m_settling_moved = -1;   // the increment's last residual with updated normals and cones (-1: not measured)
   double m_reference_force = 0;  // reference force of the last Newton iteration [N]
   double m_newton_tolerance = 0;  // residual tolerance of the current Newton solves (relative; >= residual_tolerance)
   double m_tolerance_scale = 1;   // the current Newton tolerance over the step's own (pseudo_ or residual_tolerance)
