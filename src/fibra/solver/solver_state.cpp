@@ -27,7 +27,7 @@ constexpr std::uint32_t kVersion = 4;  // 2: test_drag; 3: kind, length, checksu
 constexpr char kEnd[] = "end of state\n";
 constexpr std::size_t kMagicSize = sizeof(kMagic) - 1;
 constexpr std::size_t kEndSize = sizeof(kEnd) - 1;
-constexpr std::size_t kLengthAt = kMagicSize + 4 + 4;  // the length field's offset (version 3)
+constexpr std::size_t kLengthAt = kMagicSize + 4 + 4;  // the length field's offset (from version 3)
 enum class Kind : std::uint32_t { State = 0, Checkpoint = 1 };
 
 std::uint32_t checksum(const char* data, std::size_t n) {
@@ -395,7 +395,7 @@ SolverProgress get_progress(In& in, const ModelFingerprint& model, Index nodes, 
   return p;
 }
 
-// The whole file: magic, version 3, kind, length, the fields `body` appends, end mark, CRC.
+// The whole file: magic, version, kind, length, the fields `body` appends, end mark, CRC.
 template <class Body>
 std::string envelope(Kind kind, Body&& body) {
   std::string buffer;
@@ -419,7 +419,7 @@ std::string read_bytes(const std::string& path) {
   return bytes;
 }
 
-// Checks the magic line, the version and (version 3) the length and checksum; returns the
+// Checks the magic line, the version and (from version 3) the length and checksum; returns the
 // version and the kind of file, `in` past the header.
 std::pair<std::uint32_t, Kind> open_file(In& in, const std::string& bytes) {
   char magic[kMagicSize];

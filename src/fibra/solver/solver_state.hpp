@@ -141,7 +141,7 @@ SolverState read_state_file(const std::string& path);
 void write_checkpoint_file(const std::string& path, const Checkpoint& checkpoint);
 /// Reads a checkpoint; throws InputError naming `path` as read_state_file does.
 Checkpoint read_checkpoint_file(const std::string& path);
-/// Sets the length and checksum fields of a version-3 file's bytes to match its contents (for
+/// Sets the length and checksum fields of a version-3 or later file's bytes to match its contents (for
 /// tests and fuzzing that change a field and want the parser, not the checksum, to answer).
 void seal_state_bytes(std::string& bytes);
 /// Checks that `state` (read from `path`) belongs to `model` with `bindings` bindings: its
