@@ -15,6 +15,7 @@
 #include "fibra/body/rotation.hpp"
 #include "fibra/model/fabric.hpp"
 #include "fibra/solver/krylov.hpp"
+#include "fibra/steps/step_driver.hpp"
 
 namespace fibra {
 
@@ -194,7 +195,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   // Weaving: along a fiber the drag is weaker (method.drag_axial, 0.01), so the fibers slide along
   // themselves as the tows crimp and the edges draw in, instead of stretching against a drag
   // that holds every node (docs/theory/fabric.md, "Drag along the fibers").
-  m_problem->set_drag(weave ? m_case.solver.method.weave_drag * k0 : relax ? m_relax_drag : 0.0, m_drag_anchor,
+  m_problem->set_drag(weave ? m_case.solver.method.weave_drag * k0 : relax ? m_run.relax_drag : 0.0, m_drag_anchor,
                       weave || relax ? kDirectorDrag : 1.0, weave || relax ? m_case.solver.method.drag_axial : 1.0,
                       positions_released ? 0.0 : 1.0);
 
@@ -211,9 +212,9 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       // penetration found at the start of the step is released linearly.
       auto rule = [this](int fa, int fb) { return weave_side(fa, fb); };
       const double deepest = m_contact->prescribe_normals(fresh, m_q, Vec3::UnitZ(), rule, 0.0);
-      if (m_weave_depth < 0.0) m_weave_depth = deepest;
+      if (m_run.weave_depth < 0.0) m_run.weave_depth = deepest;
       // Released over the first half of the step; the second half settles.
-      const double offset = std::max(0.0, 1.0 - 2.0 * lambda) * m_weave_depth;
+      const double offset = std::max(0.0, 1.0 - 2.0 * lambda) * m_run.weave_depth;
       for (ContactElement& c : fresh)
         if (c.prescribed) c.offset = offset;
     }
@@ -260,7 +261,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     // the drag's). Once a relax step's drag force is negligible, its increments iterate them
     // (a slow creep would turn the normals a little at every lagged increment); the step ends
     // at an increment where they did not move.
-    const bool lagged = weave || (relax && !m_relax_settling);
+    const bool lagged = weave || (relax && !m_run.relax_settling);
     // A lagged increment is a pseudo-time state, not an equilibrium: its drag force is above
     // the step's tolerance, so its Newton solves stop at the looser method.pseudo_tolerance
     // (and the correction at the displacement tolerance scaled alike).
@@ -284,9 +285,9 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     // more after a binding update per pass, where the last 2-4 changed the edge forces by less
     // than 1e-5 of the reference force (docs/performance.md, "Test levels").
     m_tolerance_scale = 1.0;
-    const bool test_with_drag = relax && m_relax_drag > 0.0 && m_case.steps[step].is_test();
+    const bool test_with_drag = relax && m_run.relax_drag > 0.0 && m_case.steps[step].is_test();
     if (test_with_drag) {
-      const double expected = !lagged ? m_case.steps[step].tolerance : m_loading ? m_load_residual : m_relax_residual;
+      const double expected = !lagged ? m_case.steps[step].tolerance : m_loading ? m_run.load_residual : m_run.relax_residual;
       const double loose = m_case.solver.method.test_inexact * expected;
       if (loose > m_newton_tolerance) {
         m_tolerance_scale = loose / m_newton_tolerance;
@@ -307,7 +308,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       if (debug_newton())
         fmt::print(stderr, " normals turned {:.3e} rad ({:.3e} where no force), friction cones changed {:.3e}, {} elements\n",
                    turn, idle_turn, cone_change, m_problem->contacts().size());
-      m_normals_settled = turn < spec.normal_tolerance && cone_change <= spec.normal_tolerance;
+      m_run.normals_settled = turn < spec.normal_tolerance && cone_change <= spec.normal_tolerance;
       // Relax and test increments that iterate the normals (drag force below the step's
       // tolerance): the state is an equilibrium to that tolerance once the residual with the
       // updated normals and cones is below it too (the same measure as the drag's force). On
@@ -316,15 +317,15 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       // elements) while the force they move is 1e-4 of the reference force or less
       // (docs/theory/contact.md, "The solver's loops").
       bool stalled = false;
-      if (!m_normals_settled && relax && !lagged) {
+      if (!m_run.normals_settled && relax && !lagged) {
         const double moved = normal_update_residual();
         if (debug_newton()) fmt::print(stderr, " residual with the new normals and cones {:.3e}\n", moved);
         m_settling_moved = moved;
-        m_normals_settled = moved <= m_case.steps[step].tolerance;
+        m_run.normals_settled = moved <= m_case.steps[step].tolerance;
         stalled = moved > 0.5 * last_moved;
         last_moved = moved;
       }
-      if (m_normals_settled || lagged) {
+      if (m_run.normals_settled || lagged) {
         normals_settled = true;
         break;
       }
@@ -371,7 +372,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       fresh_penetrate = contacts[k].fresh && !(m_contact->penetration_ratio({contacts[k]}, m_q) <= 0.0);
     const double deepest = weave ? 0.0 : m_contact->penetration_ratio(contacts, m_q);
     const double current_deepest = weave ? 0.0 : m_contact->penetration_ratio(m_problem->contacts(), m_q);
-    if (lagged && (fresh_penetrate || deepest > 1.0 || raised > 0)) m_normals_settled = false;
+    if (lagged && (fresh_penetrate || deepest > 1.0 || raised > 0)) m_run.normals_settled = false;
     // A test level's settling increment: its state is a point of the curves once the fresh
     // elements do not penetrate and the deepest penetration is within method.test_penetration_slack
     // of the cap; the penalties raised at this pass act from the next increment, as in a
@@ -410,7 +411,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
         }
       }
     }
-    // A stalled increment ends here whatever the detection found (m_normals_settled is false:
+    // A stalled increment ends here whatever the detection found (m_run.normals_settled is false:
     // the level or the relax goes on with an increment that starts from this detection).
     if ((same && (raised == 0 || deferred)) || stalled_increment) {
       // Fibers that went through each other within the increment: cut it (not while
@@ -1225,14 +1226,8 @@ void StaticSolver::refactorize(const FactorSource& f) {
 SolverProgress StaticSolver::progress() const {
   SolverProgress p = m_run;
   p.force_start = m_program->force_start;
-  p.relax_drag = m_relax_drag;
-  p.weave_depth = m_weave_depth;
-  p.relax_residual = m_relax_residual;
-  p.load_residual = m_load_residual;
   p.last_shift = m_last_shift;
   p.reference_force = m_reference_force;
-  p.normals_settled = m_normals_settled;
-  p.relax_settling = m_relax_settling;
   p.reuse_factor = m_reuse_factor && m_linear->has_factor() && m_factor_source.valid;
   p.krylov_budget = m_krylov_budget;
   p.cg_excess = m_cg_excess;
@@ -1252,14 +1247,8 @@ void StaticSolver::resume(const SolverState& state, const SolverProgress& p) {
   m_run.factor = FactorSource{};  // (kept in m_factor_source and the detector, not here)
   m_run.detection_memory.clear();
   m_program->force_start = p.force_start;
-  m_relax_drag = p.relax_drag;
-  m_weave_depth = p.weave_depth;
-  m_relax_residual = p.relax_residual;
-  m_load_residual = p.load_residual;
   m_last_shift = p.last_shift;
   m_reference_force = p.reference_force;
-  m_normals_settled = p.normals_settled;
-  m_relax_settling = p.relax_settling;
   m_krylov_budget = p.krylov_budget;
   m_cg_excess = p.cg_excess;
   m_fresh_cg = p.fresh_cg;
@@ -1307,10 +1296,37 @@ bool StaticSolver::release_positions(int step, double lambda, int& iterations) {
   m_contact_stats = contact_stats;
   m_binding_updates = binding_updates;
   m_reference_force = reference;
-  m_normals_settled = true;
+  m_run.normals_settled = true;
   m_refusal.clear();
   return false;
 }
+
+// What a step driver asks of the solver (steps/step_driver.hpp).
+class StaticSolver::DriverHost final : public StepHost {
+ public:
+  explicit DriverHost(StaticSolver& solver) : m_s(solver) {}
+  void move_free_dofs(const VecX& motion, double scale) override {
+    const std::vector<char>& fixed = m_s.m_problem->fixed();
+    for (Index d = 0; d < m_s.m_q.size(); ++d)
+      if (!fixed[d]) m_s.m_q[d] += scale * motion[d];
+  }
+  void predict_test_level(double lambda) override { m_s.predict_test_level(m_s.m_run.step, lambda); }
+  double drag_force_residual() const override {
+    return m_s.m_problem->drag_force_norm(m_s.m_q, m_s.m_force_scale, DragPart::Positions) /
+           std::max(m_s.m_reference_force, 1e-300);
+  }
+  void release_positions(double lambda, int& iterations) override {
+    m_s.release_positions(m_s.m_run.step, lambda, iterations);
+  }
+  double penetration_over_cap() const override {
+    return m_s.m_contact ? m_s.m_contact_stats.max_penetration_ratio / m_s.m_contact->spec().max_penetration : 0.0;
+  }
+  double test_drag() const override { return m_s.m_test_drag; }
+  void set_test_drag(double drag) override { m_s.m_test_drag = drag; }
+
+ private:
+  StaticSolver& m_s;
+};
 
 RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const VecX&)>& observer) {
   // A resumed run's wall time goes on from the checkpoint's.
@@ -1319,77 +1335,33 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
                            std::chrono::duration<double>(m_resumed ? m_run.wall_time : 0.0));
   RunResult result;
   const SolverSpec& opt = m_case.solver;
+  DriverHost host(*this);
   int& total = m_run.total;
   const size_t first_step = m_resumed ? static_cast<size_t>(m_run.step) : 0;
   if (!m_resumed) total = 0;
   for (size_t s = first_step; s < m_case.steps.size(); ++s) {
     const StepSpec& st = m_case.steps[s];
     const int step = static_cast<int>(s);
+    // The rules of the step's increments (steps/step_driver.hpp): how each is sized,
+    // predicted and judged, and when the step ends.
+    const double k0 = m_contact ? m_contact->initial_stiffness() : 0.0;
+    const std::unique_ptr<StepDriver> driver = StepDriver::make(st, opt, m_contact != nullptr, k0);
+    const bool proximal = driver->proximal();
     // A resumed run goes on within its step as the checkpoint left it.
     const bool resumed = m_resumed;
     m_resumed = false;
     m_run.step = step;
     if (!resumed) {
       begin_step(step);
-      m_weave_depth = -1.0;  // measured at the step's first detection
+      m_run.weave_depth = -1.0;  // measured at the step's first detection
     }
     const double nominal = 1.0 / st.increments;
     const int max_increments = st.max_increments > 0 ? st.max_increments : 100 * st.increments;
-    const bool weave_step = st.kind == StepSpec::Kind::Weave;
     double& lambda = m_run.lambda;
     double& dl = m_run.dl;
-    // Load steps: the motion of the step's last converged increment and its size, for the next
-    // increment's predictor (below). A body's rotation dofs are its rotation over the
-    // increment (they restart from zero at each commit), so they scale like the rest.
-    VecX& last_motion = m_run.last_motion;
-    double& last_dl = m_run.last_dl;
     auto t_increment = std::chrono::steady_clock::now();
     int& done = m_run.done;
     int& attempts = m_run.attempts;
-    // Relax steps (with contact): every increment is a proximal-point step, a drag towards the
-    // increment's start whose stiffness starts at the weave's drag, k0 (method.relax_drag: the
-    // stiffest), is divided by 4 or 2 after an easy increment and quadrupled (up to k0) after a
-    // failed one; a failure at k0 is cut. The step ends once the loads are applied (lambda = 1),
-    // the drag's force at the end of an increment is below the step's tolerance times
-    // the reference force and the increment's normals, cones and penalties did not move: the
-    // state is then an equilibrium without drag.
-    // Biaxial and shear steps (tests of a woven fabric) take the same proximal increments, and
-    // each load level is repeated at the same load factor until its drag force is negligible
-    // and its normals settled: every point of their curves is an equilibrium without drag.
-    const bool relax = st.is_proximal() && m_contact && opt.method.relax_drag > 0.0;
-    const bool test = relax && st.is_test();
-    bool& level_settled = m_run.level_settled;  // stays true but in tests, where a level repeats until it settles
-    const double k0 = m_contact ? m_contact->initial_stiffness() : 0.0;
-    const double relax_max = std::max(opt.method.weave_drag, opt.method.relax_drag) * k0, relax_min = 1e-9 * k0;
-    // Twice the last drag that failed: the drag does not fall straight back to a level that
-    // just failed (each failure costs a whole Newton solve; on the 480-fiber relax the drag went
-    // 35 (failed), 141 (failed), 563, then 141 again). How fast the floor falls depends on how
-    // far the fabric still moves. Far from equilibrium (drag force above 100 times the step's
-    // tolerance) the state changes much from one increment to the next and a failure says
-    // little about the next states: the floor falls as the drag does, and an early failure at a
-    // high drag does not set the pace of the whole step (decaying by 0.7, such a floor took 22
-    // easy increments to bring the 480-fiber relax's drag from 7e4 to 7 N/m). Close to it the
-    // states hardly change and a level that failed fails again (twice at 4.4 N/m in the
-    // 480-fiber relax, with the fast floor): there the floor decays by 0.7 per increment
-    // (docs/performance.md, "The relax drag and its floor").
-    double& failed_floor = m_run.failed_floor;
-    // Tests: m_test_drag is the drag that applied the last load level (its first accepted
-    // increment). A level's first increment moves the edges; at the low drag the previous level
-    // settled with it failed twice on the 480-fiber biaxial test (at 288 and 1 152 N/m, about 10
-    // minutes each) before it converged at 4 608 N/m, so the next level starts at the drag that
-    // applied this one. It goes on from the last test step of the run, or of the run whose state
-    // this one starts from (a restart from a test's checkpoint whose first level started at
-    // a lower drag failed twice on the 480-fiber biaxial test before it reached that drag again).
-    // Tests: failed attempts at the current level's loading increment (the one that moves the
-    // edges; a failure while the level settles raises the drag and says nothing of the level's
-    // size). A level loaded at the first attempt lets the next level grow by half, back towards
-    // the requested size: a test level's loading increment takes 12-16 Newton iterations on the
-    // fabrics, so the rule of the other steps (grow after at most 4) never fired there and the
-    // 480-fiber biaxial test, once cut to 1/32 of a level, stayed at that size (2 % would have
-    // taken 5 hours; docs/performance.md, "Test levels"). A level costs about as many settling
-    // increments whatever its size, so small levels waste time; a level that fails costs one
-    // Newton solve and a cut.
-    int& level_failures = m_run.level_failures;
     // The first residual and load step of the last failed attempt at the current load factor.
     double& failed_first = m_run.failed_first;
     double& failed_dl = m_run.failed_dl;
@@ -1412,59 +1384,41 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       result.message = std::move(message);
       return result;
     };
+    // The step may end once at full load (a relax: once relaxed; a test: its last level settled;
+    // a weave with contact: its tows apart).
     bool& relaxed = m_run.relaxed;
     if (!resumed) {
       lambda = 0.0;
       dl = nominal;
-      last_motion.resize(0);
-      last_dl = 0.0;
+      m_run.last_motion.resize(0);
+      m_run.last_dl = 0.0;
       done = attempts = 0;
-      level_settled = true;
-      m_relax_drag = relax ? opt.method.relax_drag * k0 : 0.0;
-      failed_floor = 0.0;
-      level_failures = 0;
+      m_run.level_settled = true;  // stays true but in tests, where a level repeats until it settles
+      m_run.relax_drag = 0.0;
+      m_run.failed_floor = 0.0;
+      m_run.level_failures = 0;
       failed_first = -1.0;
       failed_dl = 0.0;
       uncuttable = false;
       m_iteration_factor = 1;
-      m_relax_settling = false;
+      m_run.relax_settling = false;
       failed_state.resize(0);
       failed_refusal.clear();
       m_run.settling_residual = std::numeric_limits<double>::infinity();
-      relaxed = !relax && !(weave_step && m_contact);
+      driver->begin(m_run);
     }
     while (lambda < 1.0 - 1e-12 || !relaxed) {
-      // A test level that would leave less than a quarter of itself for a last level takes it
-      // along (every level costs its settling, however small).
-      if (test && level_settled && 1.0 - lambda < 1.25 * dl) dl = 1.0 - lambda;
-      dl = std::min(dl, 1.0 - lambda);
-      const double step_dl = level_settled ? dl : 0.0;
-      if (test && level_settled && step_dl > 0.0)
-        m_relax_drag = std::max(m_relax_drag, std::min(m_test_drag, relax_max));
+      const double step_dl = driver->load_step(m_run, host);
       const VecX saved = m_q;
       m_q_start = m_q;
-      // A test level's first increment starts from the interior moved as the edges move (the
-      // drag then holds it there, not at the last level's state); friction slips and crossings
-      // are still measured from the last level's state.
-      if (test && step_dl > 0.0 && opt.method.test_predictor) predict_test_level(step, lambda + step_dl);
-      // Load steps (no drag, no weaving): an increment starts from the last converged state
-      // moved on by the last increment's motion scaled to this one's size (a secant
-      // predictor), not from that state with only the prescribed dofs moved: the first
-      // residual is then of the order of the path's curvature times the increment squared
-      // instead of the increment's whole load. docs/theory/solver.md, "Steps and increments".
-      if (!relax && !weave_step && step_dl > 0.0 && last_dl > 0.0) {
-        const std::vector<char>& fixed = m_problem->fixed();
-        const double scale = step_dl / last_dl;
-        for (Index d = 0; d < m_q.size(); ++d)
-          if (!fixed[d]) m_q[d] += scale * last_motion[d];
-      }
+      driver->predict(m_run, host, step_dl);
       m_drag_anchor = m_q;
       const std::vector<ContactElement> saved_contacts = m_contact ? m_problem->contacts() : std::vector<ContactElement>{};
       const std::vector<double> saved_multipliers = m_bodies ? m_bodies->multipliers() : std::vector<double>{};
       std::vector<double> history;
       int iterations = 0;
       double residual = 0.0;
-      m_loading = test && step_dl > 0.0;
+      m_loading = driver->loading(step_dl);
       const bool ok = solve_increment(step, lambda + step_dl, history, iterations, residual);
       ++attempts;
       if (interrupt_flag().load()) {
@@ -1484,18 +1438,8 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         if (m_contact && m_problem->set_contacts(saved_contacts, m_contact->friction()))
           m_linear->analyze(m_problem->pattern());
         ++m_stats.cuts;
-        if (step_dl > 0.0) ++level_failures;
-        // Relax: a stiffer drag first (at lambda = 1 nothing else can be cut).
-        const bool stiffer = relax && m_relax_drag < relax_max;
-        // The floor keeps a settling drag above one that failed. A test level's loading
-        // increment that failed says nothing of the drag its level (or the cut level) settles
-        // with: its drag is the loading drag's business (m_test_drag). On the 480-fiber shear a
-        // loading failure at 144 000 N/m set a floor that then held each settling increment's
-        // drag to a fall of 0.7 instead of 0.25: 24 increments (20 minutes) to reach 115 N/m.
-        if (relax) {
-          if (!(test && step_dl > 0.0)) failed_floor = std::max(failed_floor, 2.0 * m_relax_drag);
-          m_relax_drag = std::min(4.0 * m_relax_drag, relax_max);
-        }
+        if (step_dl > 0.0) ++m_run.level_failures;
+        const bool stiffer = driver->failed(m_run, step_dl);
         // Nothing to cut: an increment that moves no load (a test level's settling increment,
         // a relax step's increments at lambda = 1), or one whose first residual a cut left as
         // it was (a relax from the weave's end, where no load changes: the residual is the
@@ -1523,8 +1467,8 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
           return fail(lambda + step_dl, history, fmt::format(
               "step \"{}\": the increment at load factor {:.6g} did not converge{} within {} Newton iterations (4 x "
               "max_iterations; last relative residual {:.3e}, tolerance {:.1e}), and there is nothing to cut: {}",
-              st.name, lambda, relax ? fmt::format(" at the stiffest drag ({:.3g} N/m)", m_relax_drag) : "", iterations,
-              history.empty() ? 0.0 : history.back(), m_newton_tolerance,
+              st.name, lambda, proximal ? fmt::format(" at the stiffest drag ({:.3g} N/m)", m_run.relax_drag) : "",
+              iterations, history.empty() ? 0.0 : history.back(), m_newton_tolerance,
               step_dl == 0.0 ? "its loads are held (a test level settling, or a relax step's end)"
                              : "a cut did not change its first residual (its loads do not change)"));
         }
@@ -1549,71 +1493,14 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       failed_first = -1.0;
       failed_dl = 0.0;
       uncuttable = false;
-      const double used_drag = m_problem->drag();
-      if (test && step_dl > 0.0) m_test_drag = used_drag;
-      if (relax) {
-        // Drag force left at the end of the increment (scaled like the residual), relative to
-        // the reference force, on the nodes' positions and the bodies: the forces the fabric's
-        // edges feel. Its force on the section vectors holds the fibers' spin about their own
-        // axes, which only friction resists and which creeps on after the forces have settled
-        // (docs/theory/fabric.md, "The spins stay held"): it ends nothing. The increment that
-        // ends a relax step or settles a test level is then solved on with the positions
-        // released (release_positions).
-        m_relax_residual =
-            m_problem->drag_force_norm(m_q, m_force_scale, DragPart::Positions) / std::max(m_reference_force, 1e-300);
-        if (m_loading) m_load_residual = m_relax_residual;
-        const bool loaded = lambda + step_dl >= 1.0 - 1e-12;
-        if (test) {
-          level_settled = m_relax_residual <= st.tolerance && m_normals_settled;
-          relaxed = loaded && level_settled;
-          m_relax_settling = m_relax_residual <= st.tolerance && !level_settled;
-        } else {
-          relaxed = loaded && m_relax_residual <= st.tolerance && m_normals_settled;
-          m_relax_settling = loaded && m_relax_residual <= st.tolerance;
-        }
-        // A relax step's settling increment (it measured the residual with its updated normals
-        // and cones) that ended with them unsettled creeps on if that residual is not at least
-        // half the last such increment's.
-        bool creeping = false;
-        if (!test && m_settling_moved >= 0.0) {
-          creeping = !m_normals_settled && m_settling_moved > 0.5 * m_run.settling_residual;
-          m_run.settling_residual = m_settling_moved;
-        }
-        int released = 0;  // Newton iterations of the release (not counted by the drag's rule below)
-        if (test ? level_settled : relaxed) release_positions(step, lambda + step_dl, released);
-        // Easy increments: the drag falls, faster the easier they were. Once its force is
-        // below the tolerance and only the normals and cones are left to settle, it stays: a
-        // weaker drag would only risk a failure (the 480-fiber plain relax, at a drag force of
-        // 8.3e-5, went from 8.8 to 4.4 N/m and failed there after 25 iterations; let fall at
-        // every settling increment, the same relax failed at 2.2 N/m and took 7 minutes more).
-        // But not in a relax step whose settling creeps on: what still moves then is a
-        // mechanism only friction and the drag resist, and it moves per increment only as far
-        // as the drag lets it. On the 480-fiber twill the outermost fibers on one side of a weft
-        // tow, squeezed out sideways, crept by 2-15 um per increment at 66 N/m, the residual with
-        // their updated normals 1e-3 to 8e-3 at every increment, and the relax had not ended 20
-        // increments later (docs/theory/fabric.md, "What still creeps").
-        const double fall = m_relax_settling && !creeping ? 1.0 : iterations <= 12 ? 0.25 : iterations <= 30 ? 0.5 : 1.0;
-        m_relax_drag = std::max(std::max(fall * m_relax_drag, relax_min), std::min(failed_floor, relax_max));
-        failed_floor *= m_relax_residual > 100.0 * st.tolerance ? fall : 0.7;
-        iterations += released;
-      }
-      // Weave steps (METHOD §6: the tows are pushed apart until no interpenetration remains):
-      // once the pattern's offsets are released and the loads applied, the step goes on at full
-      // load, each increment from the last one's state, until the crossing tows are within the
-      // penetration cap; at most twice the step's increments in all (below). The plain weave of
-      // the paper's 12-fiber tows ended its ten increments 0.50 r deep, 10 times the cap, and
-      // two increments more bring it within (docs/theory/fabric.md, "The weave ends with the
-      // tows apart"). Measured on the contact set the increment solved (its statistics): a fresh
-      // detection's particles, laid out between the solved ones, can measure deeper where
-      // nothing raises their zones' penalty (on the 480-fiber twill beyond the cap for four
-      // increments at full load while the solved set went from 0.049 r to 0.046 r); the relax
-      // step takes such elements in.
-      const double weave_depth = m_contact ? m_contact_stats.max_penetration_ratio / m_contact->spec().max_penetration : 0.0;
-      if (weave_step && m_contact) relaxed = lambda + step_dl >= 1.0 - 1e-12 && weave_depth <= 1.0;
-      if (!relax && !weave_step && step_dl > 0.0) {
-        last_motion = m_q - saved;
-        last_dl = step_dl;
-      }
+      SolvedIncrement solved;
+      solved.step_dl = step_dl;
+      solved.iterations = iterations;
+      solved.drag = m_problem->drag();
+      solved.settling_moved = m_settling_moved;
+      solved.start = &saved;
+      solved.state = &m_q;
+      iterations += driver->converged(m_run, host, solved);
       lambda += step_dl;
       if (1.0 - lambda < 1e-12) lambda = 1.0;
       ++done;
@@ -1630,12 +1517,12 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       info.wall_time = seconds_since(t_start);
       info.increment_time = seconds_since(t_increment);
       info.step_end = lambda >= 1.0 && relaxed;
-      info.settled = level_settled;
-      info.relax_residual = relax ? m_relax_residual : 0.0;
-      info.spin_residual = relax ? m_problem->drag_force_norm(m_q, m_force_scale, DragPart::Sections) /
-                                       std::max(m_reference_force, 1e-300)
-                                 : 0.0;
-      info.drag = used_drag;
+      info.settled = m_run.level_settled;
+      info.relax_residual = proximal ? m_run.relax_residual : 0.0;
+      info.spin_residual = proximal ? m_problem->drag_force_norm(m_q, m_force_scale, DragPart::Sections) /
+                                          std::max(m_reference_force, 1e-300)
+                                    : 0.0;
+      info.drag = solved.drag;
       info.reactions = reactions(m_gradient);
       if (m_bodies) {
         info.binding_updates = m_binding_updates;
@@ -1666,28 +1553,15 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       if (m_progress)
         m_progress(fmt::format("step {} \"{}\"  load {:6.4f}  iterations {:2d}  residual {:.2e}  {:7.2f} s", step + 1,
                                st.name, lambda, iterations, residual, info.wall_time));
-      // Grow back towards the requested increment size: after an easy increment, or in tests
-      // once a level has settled whose loading increment converged at the first attempt.
-      // (Before the observer: a checkpoint it writes holds the next increment's size.)
+      // The next increment's size (before the observer: a checkpoint it writes holds it).
       m_run.wall_time = info.wall_time;
-      if (test) {
-        if (level_settled) {
-          if (level_failures == 0) dl = std::min(nominal, dl * 1.5);
-          level_failures = 0;
-        }
-      } else if (iterations <= 4) {
-        dl = std::min(nominal, dl * 1.5);
-      }
+      driver->grow(m_run, iterations);
       observer(info, m_q);
       t_increment = std::chrono::steady_clock::now();
-      if (weave_step && m_contact && lambda >= 1.0 && !relaxed && done >= 2 * st.increments) {
+      const std::string stop = driver->stop(m_run, host);
+      if (!stop.empty()) {
         failed_state.resize(0);  // every increment converged: nothing stalled to diagnose
-        return fail(1.0, {}, fmt::format(
-            "step \"{}\": after {} increments (twice the step's `increments`) the woven tows are still {:.3g} times "
-            "the penetration cap (contact.max_penetration) deep in each other; the weave needs smaller increments "
-            "(raise the step's `increments`) or tows that fit between each other (fabric.tow width and thickness "
-            "against the spacing)",
-            st.name, done, weave_depth));
+        return fail(1.0, {}, stop);
       }
     }
   }

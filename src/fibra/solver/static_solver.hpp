@@ -104,6 +104,7 @@ class StaticSolver {
   void set_progress(std::function<void(const std::string&)> progress) { m_progress = std::move(progress); }
 
  private:
+  class DriverHost;  // what a step driver asks of the solver (steps/step_driver.hpp)
   /// Biaxial and shear steps: the edge bodies' conditions from their positions at the step's
   /// start (prescribed start and end values of the body dofs, into `disp`).
   void test_conditions(int step, std::map<Index, std::pair<double, double>>& disp) const;
@@ -185,10 +186,7 @@ class StaticSolver {
   std::string m_refusal;      // why the contact loop refused the current increment (empty: it did not)
   double m_max_step = 0;      // largest nodal motion per Newton iteration [m]; 0 = no limit
   std::vector<std::pair<int, int>> m_fiber_tow;  // per fiber: (0 warp / 1 weft / -1 none, tow index)
-  double m_weave_depth = -1;     // penetration between crossing tows at the weave step's start [m]
-  double m_relax_drag = 0;       // relax steps: drag stiffness per node of the next increment [N/m]
   double m_test_drag = 0;        // drag that applied the last test level, of this run or its start's [N/m]
-  bool m_normals_settled = true;  // the last increment's normals and friction cones were a fixed point
   bool m_reuse_factor = false;    // the last factorization may precondition the next Newton solve
   double m_last_shift = 0;        // last shift a factorization needed, relative to its tangent's mean diagonal
   int m_krylov_budget = 20;       // CG iterations a factorization is worth (krylov_budget())
@@ -196,13 +194,10 @@ class StaticSolver {
   int m_fresh_cg = -1;            // iterations of the first CG solve after the last factorization (-1: none yet)
   VecX m_rhs;                     // right-hand side of the Newton solve
   PcgWorkspace m_pcg;             // conjugate gradients' work vectors
-  bool m_relax_settling = false;  // relax steps: the drag is negligible, normals iterated to their fixed point
   double m_settling_moved = -1;   // the increment's last residual with updated normals and cones (-1: not measured)
   double m_reference_force = 0;  // reference force of the last Newton iteration [N]
   double m_newton_tolerance = 0;  // residual tolerance of the current Newton solves (relative; >= residual_tolerance)
   double m_tolerance_scale = 1;   // the current Newton tolerance over the step's own (pseudo_ or residual_tolerance)
-  double m_relax_residual = 0;   // relax steps: drag force at the end of the last increment, relative
-  double m_load_residual = 0;    // tests: drag force at the end of the last level's loading increment (0: none yet)
   bool m_loading = false;        // tests: the increment being solved moves the edges (a level's first)
   int m_iteration_factor = 1;    // the current increment may take this many times max_iterations (1, 2 or 4)
   SolverProgress m_run;          // where run() is: its step, the step's increment control (progress())

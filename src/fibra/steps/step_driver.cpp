@@ -1,0 +1,224 @@
+#include "fibra/steps/step_driver.hpp"
+
+#include <algorithm>
+#include <fmt/format.h>
+
+namespace fibra {
+
+std::unique_ptr<StepDriver> StepDriver::make(const StepSpec& st, const SolverSpec& opt, bool contact, double k0) {
+  if (st.kind == StepSpec::Kind::Weave) return std::make_unique<WeaveDriver>(st, opt, contact);
+  // A proximal step without contact (or with the drag switched off) has nothing its drag
+  // would hold: its increments go as a load step's.
+  if (st.is_proximal() && contact && opt.method.relax_drag > 0.0) {
+    if (st.is_test()) return std::make_unique<TestDriver>(st, opt, k0);
+    return std::make_unique<RelaxDriver>(st, opt, k0);
+  }
+  return std::make_unique<LoadDriver>(st, opt);
+}
+
+double StepDriver::load_step(SolverProgress& run, StepHost& host) const {
+  (void)host;
+  run.dl = std::min(run.dl, 1.0 - run.lambda);
+  return run.dl;
+}
+
+void StepDriver::predict(const SolverProgress& run, StepHost& host, double step_dl) const {
+  (void)run;
+  (void)host;
+  (void)step_dl;
+}
+
+int StepDriver::converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const {
+  (void)run;
+  (void)host;
+  (void)inc;
+  return 0;
+}
+
+// Grow back towards the requested increment size after an easy increment.
+void StepDriver::grow(SolverProgress& run, int iterations) const {
+  if (iterations <= 4) run.dl = std::min(m_nominal, run.dl * 1.5);
+}
+
+// An increment starts from the last converged state moved on by the last increment's motion
+// scaled to this one's size (a secant predictor), not from that state with only the
+// prescribed dofs moved: the first residual is then of the order of the path's curvature times
+// the increment squared instead of the increment's whole load. docs/theory/solver.md, "Steps
+// and increments". (A body's rotation dofs are its rotation over the increment: they restart
+// from zero at each commit, so they scale like the rest.)
+void LoadDriver::predict(const SolverProgress& run, StepHost& host, double step_dl) const {
+  if (step_dl > 0.0 && run.last_dl > 0.0) host.move_free_dofs(run.last_motion, step_dl / run.last_dl);
+}
+
+int LoadDriver::converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const {
+  (void)host;
+  if (inc.step_dl > 0.0) {
+    run.last_motion = *inc.state - *inc.start;
+    run.last_dl = inc.step_dl;
+  }
+  return 0;
+}
+
+// METHOD §6: the tows are pushed apart until no interpenetration remains. Once the pattern's
+// offsets are released and the loads applied, the step goes on at full load, each increment
+// from the last one's state, until the crossing tows are within the penetration cap; at most
+// twice the step's increments in all (stop). The plain weave of the paper's 12-fiber tows
+// ended its ten increments 0.50 r deep, 10 times the cap, and two increments more bring it
+// within (docs/theory/fabric.md, "The weave ends with the tows apart"). Measured on the contact
+// set the increment solved (its statistics): a fresh detection's particles, laid out between
+// the solved ones, can measure deeper where nothing raises their zones' penalty (on the
+// 480-fiber twill beyond the cap for four increments at full load while the solved set went
+// from 0.049 r to 0.046 r); the relax step takes such elements in.
+int WeaveDriver::converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const {
+  if (m_contact) run.relaxed = run.lambda + inc.step_dl >= 1.0 - 1e-12 && host.penetration_over_cap() <= 1.0;
+  return 0;
+}
+
+std::string WeaveDriver::stop(const SolverProgress& run, StepHost& host) const {
+  if (!m_contact || run.lambda < 1.0 || run.relaxed || run.done < 2 * m_step.increments) return {};
+  return fmt::format(
+      "step \"{}\": after {} increments (twice the step's `increments`) the woven tows are still {:.3g} times the "
+      "penetration cap (contact.max_penetration) deep in each other; the weave needs smaller increments (raise the "
+      "step's `increments`) or tows that fit between each other (fabric.tow width and thickness against the spacing)",
+      m_step.name, run.done, host.penetration_over_cap());
+}
+
+// Every increment is a proximal-point step, a drag towards the increment's start whose
+// stiffness starts at the weave's drag, k0 (method.relax_drag: the stiffest), is divided by 4
+// or 2 after an easy increment and quadrupled (up to k0) after a failed one; a failure at k0 is
+// cut. The step ends once the loads are applied (lambda = 1), the drag's force at the end of an
+// increment is below the step's tolerance times the reference force and the increment's
+// normals, cones and penalties did not move: the state is then an equilibrium without drag.
+RelaxDriver::RelaxDriver(const StepSpec& st, const SolverSpec& opt, double k0)
+    : StepDriver(st, opt),
+      m_k0(k0),
+      m_drag_max(std::max(opt.method.weave_drag, opt.method.relax_drag) * k0),
+      m_drag_min(1e-9 * k0) {}
+
+void RelaxDriver::begin(SolverProgress& run) const {
+  run.relax_drag = m_solver.method.relax_drag * m_k0;
+  run.relaxed = false;
+}
+
+// Relax: a stiffer drag first (at lambda = 1 nothing else can be cut). Twice the last drag that
+// failed is the floor of the drag (run.failed_floor): it does not fall straight back to a level
+// that just failed (each failure costs a whole Newton solve; on the 480-fiber relax the drag
+// went 35 (failed), 141 (failed), 563, then 141 again).
+bool RelaxDriver::failed(SolverProgress& run, double step_dl) const {
+  const bool stiffer = run.relax_drag < m_drag_max;
+  if (floors(step_dl)) run.failed_floor = std::max(run.failed_floor, 2.0 * run.relax_drag);
+  run.relax_drag = std::min(4.0 * run.relax_drag, m_drag_max);
+  return stiffer;
+}
+
+bool RelaxDriver::settle(SolverProgress& run, double lambda_end) const {
+  const bool loaded = lambda_end >= 1.0 - 1e-12;
+  run.relaxed = loaded && run.relax_residual <= m_step.tolerance && run.normals_settled;
+  run.relax_settling = loaded && run.relax_residual <= m_step.tolerance;
+  return run.relaxed;
+}
+
+int RelaxDriver::converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const {
+  // Drag force left at the end of the increment (scaled like the residual), relative to the
+  // reference force, on the nodes' positions and the bodies: the forces the fabric's edges
+  // feel. Its force on the section vectors holds the fibers' spin about their own axes, which
+  // only friction resists and which creeps on after the forces have settled
+  // (docs/theory/fabric.md, "The spins stay held"): it ends nothing. The increment that ends a
+  // relax step or settles a test level is then solved on with the positions released
+  // (release_positions).
+  run.relax_residual = host.drag_force_residual();
+  if (loading(inc.step_dl)) run.load_residual = run.relax_residual;
+  const double lambda_end = run.lambda + inc.step_dl;
+  const bool release = settle(run, lambda_end);
+  // A relax step's settling increment (it measured the residual with its updated normals and
+  // cones) that ended with them unsettled creeps on if that residual is not at least half the
+  // last such increment's.
+  bool creeping = false;
+  if (!m_step.is_test() && inc.settling_moved >= 0.0) {
+    creeping = !run.normals_settled && inc.settling_moved > 0.5 * run.settling_residual;
+    run.settling_residual = inc.settling_moved;
+  }
+  int released = 0;  // Newton iterations of the release (not counted by the drag's rule)
+  if (release) host.release_positions(lambda_end, released);
+  adapt_drag(run, inc.iterations, creeping);
+  return released;
+}
+
+// Easy increments: the drag falls, faster the easier they were. Once its force is below the
+// tolerance and only the normals and cones are left to settle, it stays: a weaker drag would
+// only risk a failure (the 480-fiber plain relax, at a drag force of 8.3e-5, went from 8.8 to
+// 4.4 N/m and failed there after 25 iterations; let fall at every settling increment, the same
+// relax failed at 2.2 N/m and took 7 minutes more). But not in a relax step whose settling
+// creeps on: what still moves then is a mechanism only friction and the drag resist, and it
+// moves per increment only as far as the drag lets it. On the 480-fiber twill the outermost
+// fibers on one side of a weft tow, squeezed out sideways, crept by 2-15 um per increment at
+// 66 N/m, the residual with their updated normals 1e-3 to 8e-3 at every increment, and the
+// relax had not ended 20 increments later (docs/theory/fabric.md, "What still creeps").
+//
+// The floor keeps the drag above twice one that failed. How fast it falls depends on how far
+// the fabric still moves. Far from equilibrium (drag force above 100 times the step's
+// tolerance) the state changes much from one increment to the next and a failure says little
+// about the next states: the floor falls as the drag does, and an early failure at a high drag
+// does not set the pace of the whole step (decaying by 0.7, such a floor took 22 easy
+// increments to bring the 480-fiber relax's drag from 7e4 to 7 N/m). Close to it the states
+// hardly change and a level that failed fails again (twice at 4.4 N/m in the 480-fiber relax,
+// with the fast floor): there the floor decays by 0.7 per increment (docs/performance.md, "The
+// relax drag and its floor").
+void RelaxDriver::adapt_drag(SolverProgress& run, int iterations, bool creeping) const {
+  const double fall = run.relax_settling && !creeping ? 1.0 : iterations <= 12 ? 0.25 : iterations <= 30 ? 0.5 : 1.0;
+  run.relax_drag = std::max(std::max(fall * run.relax_drag, m_drag_min), std::min(run.failed_floor, m_drag_max));
+  run.failed_floor *= run.relax_residual > 100.0 * m_step.tolerance ? fall : 0.7;
+}
+
+// A test level that would leave less than a quarter of itself for a last level takes it along
+// (every level costs its settling, however small). A level's settling increments repeat its
+// load factor (load step 0).
+//
+// A level's first increment moves the edges; at the low drag the previous level settled with it
+// failed twice on the 480-fiber biaxial test (at 288 and 1 152 N/m, about 10 minutes each)
+// before it converged at 4 608 N/m, so the next level starts at the drag that applied this one
+// (StepHost::test_drag). It goes on from the last test step of the run, or of the run whose
+// state this one starts from (a restart from a test's checkpoint whose first level started at a
+// lower drag failed twice on the 480-fiber biaxial test before it reached that drag again).
+double TestDriver::load_step(SolverProgress& run, StepHost& host) const {
+  if (run.level_settled && 1.0 - run.lambda < 1.25 * run.dl) run.dl = 1.0 - run.lambda;
+  run.dl = std::min(run.dl, 1.0 - run.lambda);
+  const double step_dl = run.level_settled ? run.dl : 0.0;
+  if (run.level_settled && step_dl > 0.0) run.relax_drag = std::max(run.relax_drag, std::min(host.test_drag(), m_drag_max));
+  return step_dl;
+}
+
+// A test level's first increment starts from the interior moved as the edges move (the drag
+// then holds it there, not at the last level's state); friction slips and crossings are still
+// measured from the last level's state.
+void TestDriver::predict(const SolverProgress& run, StepHost& host, double step_dl) const {
+  if (step_dl > 0.0 && m_solver.method.test_predictor) host.predict_test_level(run.lambda + step_dl);
+}
+
+int TestDriver::converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const {
+  if (inc.step_dl > 0.0) host.set_test_drag(inc.drag);
+  return RelaxDriver::converged(run, host, inc);
+}
+
+bool TestDriver::settle(SolverProgress& run, double lambda_end) const {
+  run.level_settled = run.relax_residual <= m_step.tolerance && run.normals_settled;
+  run.relaxed = lambda_end >= 1.0 - 1e-12 && run.level_settled;
+  run.relax_settling = run.relax_residual <= m_step.tolerance && !run.level_settled;
+  return run.level_settled;
+}
+
+// A level whose loading increment converged at the first attempt lets the next level grow by
+// half, back towards the requested size: a test level's loading increment takes 12-16 Newton
+// iterations on the fabrics, so the rule of the other steps (grow after at most 4) never fired
+// there and the 480-fiber biaxial test, once cut to 1/32 of a level, stayed at that size (2 %
+// would have taken 5 hours; docs/performance.md, "Test levels"). A level costs about as many
+// settling increments whatever its size, so small levels waste time; a level that fails costs
+// one Newton solve and a cut.
+void TestDriver::grow(SolverProgress& run, int iterations) const {
+  (void)iterations;
+  if (!run.level_settled) return;
+  if (run.level_failures == 0) run.dl = std::min(m_nominal, run.dl * 1.5);
+  run.level_failures = 0;
+}
+
+}  // namespace fibra
