@@ -85,6 +85,9 @@ TEST(StepDrivers, ALoadStepPredictsFromTheLastIncrementsMotion) {
   const LoadDriver d(st, opt);
   SolverProgress run = fresh(d, 4);
   EXPECT_TRUE(run.relaxed);  // ends at full load
+  const IncrementMode mode = d.mode(run, 0.25);  // no drag, no weave, no test
+  EXPECT_FALSE(mode.weave || mode.proximal || mode.test || mode.loading);
+  EXPECT_EQ(mode.drag, 0.0);
   RecordingHost host;
   const double first = d.load_step(run, host);
   EXPECT_DOUBLE_EQ(first, 0.25);
@@ -116,9 +119,14 @@ TEST(StepDrivers, ALoadStepPredictsFromTheLastIncrementsMotion) {
 TEST(StepDrivers, AWeaveEndsOnceItsTowsAreApartAndStopsAtTwiceItsIncrements) {
   const SolverSpec opt;
   const StepSpec st = step(StepSpec::Kind::Weave, 3);
-  const WeaveDriver d(st, opt, true);
+  const WeaveDriver d(st, opt, true, kK0);
   SolverProgress run = fresh(d, 3);
   EXPECT_FALSE(run.relaxed);
+  // Solved with the weave's prescribed normals and its drag, not as a proximal step.
+  const IncrementMode mode = d.mode(run, 1.0 / 3.0);
+  EXPECT_TRUE(mode.weave);
+  EXPECT_FALSE(mode.proximal || mode.test || mode.loading);
+  EXPECT_DOUBLE_EQ(mode.drag, opt.method.weave_drag * kK0);
   RecordingHost host;
   host.depth = 1.5;
   run.lambda = 2.0 / 3.0;
@@ -136,7 +144,7 @@ TEST(StepDrivers, AWeaveEndsOnceItsTowsAreApartAndStopsAtTwiceItsIncrements) {
   EXPECT_TRUE(run.relaxed);
   EXPECT_TRUE(d.stop(run, host).empty());
   // Without contact a weave ends at full load.
-  const WeaveDriver alone(st, opt, false);
+  const WeaveDriver alone(st, opt, false, 0.0);
   EXPECT_TRUE(fresh(alone, 3).relaxed);
 }
 
@@ -147,6 +155,12 @@ TEST(StepDrivers, ARelaxStepsDragFallsAfterEasyIncrementsAndRisesAfterFailures) 
   SolverProgress run = fresh(d, 4);
   EXPECT_DOUBLE_EQ(run.relax_drag, kK0);  // the stiffest: the weave's
   EXPECT_FALSE(run.relaxed);
+  run.relax_drag = 0.5 * kK0;
+  const IncrementMode mode = d.mode(run, 0.25);  // solved with the adapted drag
+  EXPECT_TRUE(mode.proximal);
+  EXPECT_FALSE(mode.weave || mode.test || mode.loading);
+  EXPECT_DOUBLE_EQ(mode.drag, 0.5 * kK0);
+  run.relax_drag = kK0;
   RecordingHost host;
   host.drag_residual = 1.0;  // far from equilibrium
   d.converged(run, host, solved(0.25, 12));
@@ -237,6 +251,9 @@ TEST(StepDrivers, ATestRepeatsEachLevelUntilItSettles) {
   EXPECT_DOUBLE_EQ(first, 0.25);
   EXPECT_DOUBLE_EQ(run.relax_drag, 300.0);
   EXPECT_TRUE(d.loading(first));
+  const IncrementMode loading = d.mode(run, first);
+  EXPECT_TRUE(loading.proximal && loading.test && loading.loading);
+  EXPECT_DOUBLE_EQ(loading.drag, 300.0);
   d.predict(run, host, first);
   ASSERT_EQ(host.predicted.size(), 1u);
   EXPECT_DOUBLE_EQ(host.predicted[0], 0.25);
@@ -252,6 +269,7 @@ TEST(StepDrivers, ATestRepeatsEachLevelUntilItSettles) {
   EXPECT_DOUBLE_EQ(run.dl, 0.25);
   EXPECT_DOUBLE_EQ(d.load_step(run, host), 0.0);
   EXPECT_FALSE(d.loading(0.0));
+  EXPECT_FALSE(d.mode(run, 0.0).loading);
   // A settling increment that fails raises the drag but sets no floor above a loading one's.
   run.failed_floor = 0.0;
   d.failed(run, 1.0);

@@ -16,6 +16,7 @@
 #include "fibra/model/fabric.hpp"
 #include "fibra/solver/krylov.hpp"
 #include "fibra/steps/step_driver.hpp"
+#include "fibra/steps/test_edges.hpp"
 
 namespace fibra {
 
@@ -178,15 +179,10 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   m_newton_tolerance = m_case.solver.residual_tolerance;
   m_tolerance_scale = 1.0;
   if (!m_contact) return equilibrium(history, iterations, residual);
-  const bool weave = m_case.steps[step].kind == StepSpec::Kind::Weave;
-  // Weaving is a pseudo-time process: a drag towards the increment's start (stiffness per
-  // node a multiple of the contact penalty) keeps each increment well posed while loose
-  // fibers are pushed through their crossing partners; the relax step removes it.
-  // Relax, biaxial and shear steps: proximal increments (below).
-  const bool relax = m_case.steps[step].is_proximal();
-  const double k0 = m_contact->initial_stiffness();
-  // Relax: each increment is a proximal-point step, a drag of adaptive stiffness (run())
-  // towards the increment's start.
+  // How the step's driver has the increment solved (steps/step_driver.hpp): the weave's
+  // prescribed normals, or proximal increments (relax and tests), and the drag.
+  const bool weave = m_mode.weave;
+  const bool relax = m_mode.proximal;
   // In weave and relax steps the section vectors are dragged 100 times harder than their
   // boundary's motion: a fiber's rigid spin about its axis has no other stiffness where
   // friction does not hold it, and with the r^2 weight (5.8e-5 N/m per node on the 480-fiber
@@ -195,9 +191,8 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   // Weaving: along a fiber the drag is weaker (method.drag_axial, 0.01), so the fibers slide along
   // themselves as the tows crimp and the edges draw in, instead of stretching against a drag
   // that holds every node (docs/theory/fabric.md, "Drag along the fibers").
-  m_problem->set_drag(weave ? m_case.solver.method.weave_drag * k0 : relax ? m_run.relax_drag : 0.0, m_drag_anchor,
-                      weave || relax ? kDirectorDrag : 1.0, weave || relax ? m_case.solver.method.drag_axial : 1.0,
-                      positions_released ? 0.0 : 1.0);
+  m_problem->set_drag(m_mode.drag, m_drag_anchor, weave || relax ? kDirectorDrag : 1.0,
+                      weave || relax ? m_case.solver.method.drag_axial : 1.0, positions_released ? 0.0 : 1.0);
 
   // METHOD §4: (1) contact elements, repeated while the set changes; (2) normals, repeated
   // while they turn; (3) Newton on the rest. A zone that penetrates too deep gets a stiffer
@@ -285,9 +280,9 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     // more after a binding update per pass, where the last 2-4 changed the edge forces by less
     // than 1e-5 of the reference force (docs/performance.md, "Test levels").
     m_tolerance_scale = 1.0;
-    const bool test_with_drag = relax && m_run.relax_drag > 0.0 && m_case.steps[step].is_test();
+    const bool test_with_drag = m_mode.test && m_mode.drag > 0.0;
     if (test_with_drag) {
-      const double expected = !lagged ? m_case.steps[step].tolerance : m_loading ? m_run.load_residual : m_run.relax_residual;
+      const double expected = !lagged ? m_case.steps[step].tolerance : m_mode.loading ? m_run.load_residual : m_run.relax_residual;
       const double loose = m_case.solver.method.test_inexact * expected;
       if (loose > m_newton_tolerance) {
         m_tolerance_scale = loose / m_newton_tolerance;
@@ -432,7 +427,8 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       // harder (docs/theory/contact.md, "Softening"). Softened zones stay above the initial
       // penalty; like the raises, the change acts from the next increment.
       if (lagged && !weave)
-        m_contact_stats.penalty_softenings += m_contact->soften_penalty(m_problem->contacts(), responses, k0);
+        m_contact_stats.penalty_softenings +=
+            m_contact->soften_penalty(m_problem->contacts(), responses, m_contact->initial_stiffness());
       return true;
     }
     // Penalties raised and no fresh element that penetrates: keep the current elements (with
@@ -870,75 +866,36 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
 
 void StaticSolver::test_conditions(int step, std::map<Index, std::pair<double, double>>& disp) const {
   // METHOD §7. The fabric's edge bodies are driven from where they are at the step's start:
-  // strains and angles are measured from there, not from the flat starting assembly.
-  const StepSpec& st = m_case.steps[step];
+  // strains and angles are measured from there, not from the flat starting assembly
+  // (steps/test_edges.hpp).
+  TestEdges edges;
   int edge[4];
   for (int e = 0; e < 4; ++e) {
     edge[e] = m_model.body_index(kEdgeBodies[e]);
     if (edge[e] < 0) throw std::logic_error("StaticSolver: a test step without edge bodies (resolve_case checks it)");
+    edges.first_dof[e] = m_model.bodies[edge[e]].first_dof;
   }
-  auto dof = [&](int e, int k) { return m_model.bodies[edge[e]].first_dof + k; };
-  auto u = [&](int e, int k) { return m_q[dof(e, k)] - m_model.reference[dof(e, k)]; };
-  auto centre = [&](int e) { return Vec3(m_q.segment<3>(dof(e, 0))); };
-  // Every component held where it is; then the driven and the free ones.
-  for (int e = 0; e < 4; ++e) {
-    const Vec3 rotation = m_bodies->rotation(edge[e], m_q);
-    for (int k = 0; k < 3; ++k) {
-      disp[dof(e, k)] = {u(e, k), u(e, k)};
-      disp[dof(e, 3 + k)] = {rotation[k], rotation[k]};
-    }
-  }
-  const double lx = centre(1).x() - centre(0).x(), ly = centre(3).y() - centre(2).y();
-  if (st.kind == StepSpec::Kind::Biaxial) {
-    // Warp edges pulled apart by strain x their distance, each by half of it, so that the
-    // fabric's centre stays where it is; the weft ones likewise by ratio x that strain x
-    // theirs, or the y+ edge free along the weft (ratio 0: uniaxial, the weft keeps its load).
-    // Moving one edge of each pair by the whole elongation (the other held) carried the
-    // fabric's middle along x by strain x lx / 2 while the edges across held their tow ends'
-    // mean where it was: the tows across were bent in the plane and the held edges took a
-    // tangential force that grew with the load (29 N, 6.5 % of the axial force, at 2 % on the
-    // 480-fiber plain weave; docs/theory/fabric.md, "Mechanical tests").
-    const double ex = 0.5 * st.strain * lx;
-    disp[dof(0, 0)].second = u(0, 0) - ex;
-    disp[dof(1, 0)].second = u(1, 0) + ex;
-    if (st.ratio > 0.0) {
-      const double ey = 0.5 * st.ratio * st.strain * ly;
-      disp[dof(2, 1)].second = u(2, 1) - ey;
-      disp[dof(3, 1)].second = u(3, 1) + ey;
-    } else {
-      disp.erase(dof(3, 1));
-    }
-    return;
-  }
-  // Shear: the y- and y+ edges (bottom and top) moved in opposite senses along x; the lateral
-  // x- and x+ edges free to slide along them (y) and to turn about the fabric's normal, and so
-  // are the tow ends bound to them; x- stays where it is along x and x+ keeps whatever holds
-  // it there (by default free under the warp tension). The height held: each edge moves by
-  // (ly / 2) tan(angle), and the line between the edges' centres turns by the angle as its
-  // length grows by 1 / cos(angle). The height free: the top edge keeps the force it had
-  // across (the weft tension) and each edge moves by (ly / 2) sin(angle), the angle the line
-  // between them turns by if its length stays.
-  const double gamma = st.angle * std::numbers::pi / 180.0;
-  const double d = 0.5 * ly * (st.free_height ? std::sin(gamma) : std::tan(gamma));
-  disp[dof(2, 0)].second = u(2, 0) - d;
-  disp[dof(3, 0)].second = u(3, 0) + d;
-  if (m_program->force_end[dof(1, 0)] != 0.0) disp.erase(dof(1, 0));
-  if (st.free_height) {
-    if (m_program->force_end[dof(3, 1)] == 0.0)
-      throw std::logic_error("StaticSolver: a shear with its height free and no force across (resolve_case checks it)");
-    disp.erase(dof(3, 1));
-  }
-  for (int e : {0, 1}) {
-    disp.erase(dof(e, 1));
-    disp.erase(dof(e, 5));
+  for (int e : {0, 1})
     for (const BindingSpec& b : m_case.bindings) {
       if (b.body != kEdgeBodies[e]) continue;
       for (const std::string& child : b.bodies) {
         const int cb = m_model.body_index(child);
-        if (cb >= 0) disp.erase(m_model.bodies[cb].first_dof + 5);
+        if (cb >= 0) edges.bound[e].push_back(m_model.bodies[cb].first_dof);
       }
     }
+  auto u = [&](Index d) { return m_q[d] - m_model.reference[d]; };
+  // Every component held where it is; the test's conditions then drive some and free others.
+  for (int e = 0; e < 4; ++e) {
+    const Index d0 = edges.first_dof[e];
+    const Vec3 rotation = m_bodies->rotation(edge[e], m_q);
+    for (int k = 0; k < 3; ++k) {
+      disp[d0 + k] = {u(d0 + k), u(d0 + k)};
+      disp[d0 + 3 + k] = {rotation[k], rotation[k]};
+    }
   }
+  edges.lx = m_q[edges.first_dof[1]] - m_q[edges.first_dof[0]];
+  edges.ly = m_q[edges.first_dof[3] + 1] - m_q[edges.first_dof[2] + 1];
+  test_edge_conditions(m_case.steps[step], edges, m_program->force_end, disp);
 }
 
 void StaticSolver::predict_test_level(int step, double lambda) {
@@ -1418,7 +1375,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       std::vector<double> history;
       int iterations = 0;
       double residual = 0.0;
-      m_loading = driver->loading(step_dl);
+      m_mode = driver->mode(m_run, step_dl);
       const bool ok = solve_increment(step, lambda + step_dl, history, iterations, residual);
       ++attempts;
       if (interrupt_flag().load()) {

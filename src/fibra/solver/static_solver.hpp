@@ -16,6 +16,7 @@
 #include "fibra/solver/problem.hpp"
 #include "fibra/solver/solver_state.hpp"
 #include "fibra/solver/stall_diagnosis.hpp"
+#include "fibra/steps/step_driver.hpp"
 
 namespace fibra {
 
@@ -198,7 +199,7 @@ class StaticSolver {
   double m_reference_force = 0;  // reference force of the last Newton iteration [N]
   double m_newton_tolerance = 0;  // residual tolerance of the current Newton solves (relative; >= residual_tolerance)
   double m_tolerance_scale = 1;   // the current Newton tolerance over the step's own (pseudo_ or residual_tolerance)
-  bool m_loading = false;        // tests: the increment being solved moves the edges (a level's first)
+  IncrementMode m_mode;          // how the increment being solved is solved (its step's driver)
   int m_iteration_factor = 1;    // the current increment may take this many times max_iterations (1, 2 or 4)
   SolverProgress m_run;          // where run() is: its step, the step's increment control (progress())
   bool m_resumed = false;        // run() goes on from m_run (resume())

@@ -6,7 +6,7 @@
 namespace fibra {
 
 std::unique_ptr<StepDriver> StepDriver::make(const StepSpec& st, const SolverSpec& opt, bool contact, double k0) {
-  if (st.kind == StepSpec::Kind::Weave) return std::make_unique<WeaveDriver>(st, opt, contact);
+  if (st.kind == StepSpec::Kind::Weave) return std::make_unique<WeaveDriver>(st, opt, contact, k0);
   // A proximal step without contact (or with the drag switched off) has nothing its drag
   // would hold: its increments go as a load step's.
   if (st.is_proximal() && contact && opt.method.relax_drag > 0.0) {
@@ -69,6 +69,18 @@ int LoadDriver::converged(SolverProgress& run, StepHost& host, const SolvedIncre
 // the solved ones, can measure deeper where nothing raises their zones' penalty (on the
 // 480-fiber twill beyond the cap for four increments at full load while the solved set went
 // from 0.049 r to 0.046 r); the relax step takes such elements in.
+// Weaving is a pseudo-time process: a drag towards the increment's start (stiffness per node a
+// multiple of the contact penalty) keeps each increment well posed while loose fibers are
+// pushed through their crossing partners; the relax step removes it.
+IncrementMode WeaveDriver::mode(const SolverProgress& run, double step_dl) const {
+  (void)run;
+  (void)step_dl;
+  IncrementMode m;
+  m.weave = m_contact;
+  m.drag = m_contact ? m_solver.method.weave_drag * m_k0 : 0.0;
+  return m;
+}
+
 int WeaveDriver::converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const {
   if (m_contact) run.relaxed = run.lambda + inc.step_dl >= 1.0 - 1e-12 && host.penetration_over_cap() <= 1.0;
   return 0;
@@ -98,6 +110,14 @@ RelaxDriver::RelaxDriver(const StepSpec& st, const SolverSpec& opt, double k0)
 void RelaxDriver::begin(SolverProgress& run) const {
   run.relax_drag = m_solver.method.relax_drag * m_k0;
   run.relaxed = false;
+}
+
+IncrementMode RelaxDriver::mode(const SolverProgress& run, double step_dl) const {
+  (void)step_dl;
+  IncrementMode m;
+  m.proximal = true;
+  m.drag = run.relax_drag;
+  return m;
 }
 
 // Relax: a stiffer drag first (at lambda = 1 nothing else can be cut). Twice the last drag that
@@ -193,6 +213,13 @@ double TestDriver::load_step(SolverProgress& run, StepHost& host) const {
 // measured from the last level's state.
 void TestDriver::predict(const SolverProgress& run, StepHost& host, double step_dl) const {
   if (step_dl > 0.0 && m_solver.method.test_predictor) host.predict_test_level(run.lambda + step_dl);
+}
+
+IncrementMode TestDriver::mode(const SolverProgress& run, double step_dl) const {
+  IncrementMode m = RelaxDriver::mode(run, step_dl);
+  m.test = true;
+  m.loading = loading(step_dl);
+  return m;
 }
 
 int TestDriver::converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const {

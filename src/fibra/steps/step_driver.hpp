@@ -43,6 +43,24 @@ class StepHost {
   virtual void set_test_drag(double drag) = 0;
 };
 
+/// How an increment of the step is solved (StaticSolver::solve_increment), as its driver sets it.
+struct IncrementMode {
+  /// Drag stiffness per node towards the increment's start [N/m] (0: none).
+  double drag = 0;
+  /// Weave: contacts between crossing tows pushed to the pattern's side, their starting
+  /// penetration released over the step's first half, without friction; the normals and cones
+  /// lagged (one solve, updated for the next increment).
+  bool weave = false;
+  /// Relax and tests: the drag adapts (the section vectors and the motion along a fiber
+  /// weighted as in the weave); the normals and cones lagged until the drag's force is below
+  /// the step's tolerance, then iterated to their fixed point.
+  bool proximal = false;
+  /// Tests: a level's Newton solves only as exact as the state they are part of
+  /// (method.test_inexact); its first increment moves the edges (`loading`).
+  bool test = false;
+  bool loading = false;
+};
+
 /// An increment that converged, as its step's driver sees it.
 struct SolvedIncrement {
   double step_dl = 0;      ///< its load step (0: a test level settling, or a relax at full load)
@@ -76,6 +94,12 @@ class StepDriver {
   virtual bool loading(double step_dl) const {
     (void)step_dl;
     return false;
+  }
+  /// How the increment about to be solved, with load step `step_dl`, is solved.
+  virtual IncrementMode mode(const SolverProgress& run, double step_dl) const {
+    (void)run;
+    (void)step_dl;
+    return {};
   }
   /// After a failed attempt: returns true when the next attempt takes a stiffer drag instead
   /// of a smaller load step.
@@ -119,13 +143,16 @@ class LoadDriver : public StepDriver {
 /// penetration cap, at most twice the step's increments.
 class WeaveDriver : public StepDriver {
  public:
-  WeaveDriver(const StepSpec& st, const SolverSpec& opt, bool contact) : StepDriver(st, opt), m_contact(contact) {}
+  WeaveDriver(const StepSpec& st, const SolverSpec& opt, bool contact, double k0)
+      : StepDriver(st, opt), m_contact(contact), m_k0(k0) {}
   void begin(SolverProgress& run) const override { run.relaxed = !m_contact; }
+  IncrementMode mode(const SolverProgress& run, double step_dl) const override;
   int converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const override;
   std::string stop(const SolverProgress& run, StepHost& host) const override;
 
  private:
   bool m_contact;
+  double m_k0;
 };
 
 /// Relax steps with contact: proximal increments whose drag adapts; the step ends at full load
@@ -135,6 +162,7 @@ class RelaxDriver : public StepDriver {
   RelaxDriver(const StepSpec& st, const SolverSpec& opt, double k0);
   bool proximal() const override { return true; }
   void begin(SolverProgress& run) const override;
+  IncrementMode mode(const SolverProgress& run, double step_dl) const override;
   bool failed(SolverProgress& run, double step_dl) const override;
   int converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const override;
 
@@ -161,6 +189,7 @@ class TestDriver : public RelaxDriver {
   double load_step(SolverProgress& run, StepHost& host) const override;
   void predict(const SolverProgress& run, StepHost& host, double step_dl) const override;
   bool loading(double step_dl) const override { return step_dl > 0.0; }
+  IncrementMode mode(const SolverProgress& run, double step_dl) const override;
   int converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const override;
   void grow(SolverProgress& run, int iterations) const override;
 

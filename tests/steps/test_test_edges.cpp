@@ -1,0 +1,100 @@
+// The tests' edge conditions (fibra/steps/test_edges.hpp) on four edge bodies: which
+// components a biaxial or a shear step drives, by how much, and which it frees.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "fibra/steps/test_edges.hpp"
+
+namespace fibra::test {
+namespace {
+
+using Disp = std::map<Index, std::pair<double, double>>;
+
+// Four edge bodies at dofs 0, 6, 12, 18 (x-, x+, y-, y+), the x ones with a tow end's body
+// bound each (dofs 24, 30); every component held at 0.01 * its dof.
+struct FourEdges {
+  TestEdges edges;
+  Disp disp;
+  VecX force_end = VecX::Zero(36);
+  FourEdges() {
+    edges.first_dof = {0, 6, 12, 18};
+    edges.bound = {std::vector<Index>{24}, std::vector<Index>{30}};
+    edges.lx = 4e-3;
+    edges.ly = 2e-3;
+    for (Index d = 0; d < 24; ++d) disp[d] = {0.01 * d, 0.01 * d};
+    for (Index d = 24; d < 36; ++d) disp[d] = {0.0, 0.0};
+  }
+  double end(Index d) const { return disp.at(d).second; }
+};
+
+StepSpec test_step(StepSpec::Kind kind) {
+  StepSpec st;
+  st.kind = kind;
+  return st;
+}
+
+TEST(TestEdges, ABiaxialStepPullsEachPairOfEdgesApartByHalfItsElongation) {
+  FourEdges s;
+  StepSpec st = test_step(StepSpec::Kind::Biaxial);
+  st.strain = 0.02;
+  st.ratio = 0.5;
+  test_edge_conditions(st, s.edges, s.force_end, s.disp);
+  EXPECT_DOUBLE_EQ(s.end(0), 0.0 - 0.5 * 0.02 * 4e-3);   // x- along x
+  EXPECT_DOUBLE_EQ(s.end(6), 0.06 + 0.5 * 0.02 * 4e-3);  // x+ along x
+  EXPECT_DOUBLE_EQ(s.end(13), 0.13 - 0.5 * 0.5 * 0.02 * 2e-3);
+  EXPECT_DOUBLE_EQ(s.end(19), 0.19 + 0.5 * 0.5 * 0.02 * 2e-3);
+  // Everything else held where it was, nothing freed.
+  for (Index d : {1, 2, 3, 4, 5, 7, 8, 12, 14, 18, 20, 23}) EXPECT_DOUBLE_EQ(s.end(d), 0.01 * d) << d;
+  EXPECT_EQ(s.disp.size(), 36u);
+  for (const auto& [d, se] : s.disp) EXPECT_EQ(se.first, d < 24 ? 0.01 * d : 0.0) << d;
+}
+
+TEST(TestEdges, AUniaxialStepFreesTheWeftEdgeAlongTheWeft) {
+  FourEdges s;
+  StepSpec st = test_step(StepSpec::Kind::Biaxial);
+  st.strain = 0.01;
+  st.ratio = 0.0;
+  test_edge_conditions(st, s.edges, s.force_end, s.disp);
+  EXPECT_EQ(s.disp.count(19), 0u);
+  EXPECT_DOUBLE_EQ(s.end(13), 0.13);  // y- held
+  EXPECT_EQ(s.disp.size(), 35u);
+}
+
+TEST(TestEdges, AShearStepMovesBottomAndTopAndFreesTheLateralEdgesAndTheirTowEnds) {
+  for (bool free_height : {false, true}) {
+    FourEdges s;
+    StepSpec st = test_step(StepSpec::Kind::Shear);
+    st.angle = 10.0;
+    st.free_height = free_height;
+    s.force_end[6] = 5.0;   // x+ held along x by a force: free there
+    s.force_end[19] = 1.0;  // the weft tension across
+    test_edge_conditions(st, s.edges, s.force_end, s.disp);
+    const double gamma = 10.0 * std::numbers::pi / 180.0;
+    const double d = 0.5 * 2e-3 * (free_height ? std::sin(gamma) : std::tan(gamma));
+    EXPECT_DOUBLE_EQ(s.end(12), 0.12 - d);
+    EXPECT_DOUBLE_EQ(s.end(18), 0.18 + d);
+    EXPECT_DOUBLE_EQ(s.end(0), 0.0);  // x- stays along x
+    // Free: x+ along x; the x edges along y and about z, their tow ends about z; the top's
+    // height when it is free.
+    for (Index f : {6, 1, 5, 7, 11, 29, 35}) EXPECT_EQ(s.disp.count(f), 0u) << f;
+    EXPECT_EQ(s.disp.count(19), free_height ? 0u : 1u);
+    EXPECT_EQ(s.disp.size(), free_height ? 28u : 29u);
+  }
+}
+
+TEST(TestEdges, AShearWithItsHeightFreeNeedsAForceAcross) {
+  FourEdges s;
+  StepSpec st = test_step(StepSpec::Kind::Shear);
+  st.angle = 5.0;
+  st.free_height = true;
+  EXPECT_THROW(test_edge_conditions(st, s.edges, s.force_end, s.disp), std::logic_error);
+}
+
+}  // namespace
+}  // namespace fibra::test
