@@ -111,9 +111,15 @@ struct SolverProgress {
   std::string failed_refusal;
   VecX force_start;        ///< the step's loads at its start (force_end is the state's)
   // The method's adaptive values.
-  double relax_drag = 0, weave_depth = -1, relax_residual = 0, load_residual = 0, last_shift = 0;
+  double relax_drag = 0;       ///< relax and test steps: drag stiffness per node of the next increment [N/m]
+  double weave_depth = -1;     ///< penetration between crossing tows at the weave step's start [m] (-1: not measured)
+  double relax_residual = 0;   ///< relax and test steps: drag force at the end of the last increment, relative
+  double load_residual = 0;    ///< tests: the same at the end of the last level's loading increment (0: none yet)
+  double last_shift = 0;
   double reference_force = 0;
-  bool normals_settled = true, relax_settling = false, reuse_factor = false;
+  bool normals_settled = true;   ///< the last increment's normals and friction cones were a fixed point
+  bool relax_settling = false;   ///< relax and test steps: the drag's force is negligible, the normals iterated
+  bool reuse_factor = false;
   int krylov_budget = 20, cg_excess = 0, fresh_cg = -1, iteration_factor = 1;
   SolverStats stats;
   FactorSource factor;
