@@ -39,12 +39,16 @@ StepSpec test_step(StepSpec::Kind kind) {
   return st;
 }
 
+StepSpec biaxial(double strain, double ratio) {
+  StepSpec st = test_step(StepSpec::Kind::Biaxial);
+  st.strain = strain;
+  st.ratio = ratio;
+  return st;
+}
+
 TEST(TestEdges, ABiaxialStepPullsEachPairOfEdgesApartByHalfItsElongation) {
   FourEdges s;
-  StepSpec st = test_step(StepSpec::Kind::Biaxial);
-  st.strain = 0.02;
-  st.ratio = 0.5;
-  test_edge_conditions(st, s.edges, s.force_end, s.disp);
+  test_edge_conditions(biaxial(0.02, 0.5), s.edges, s.force_end, s.disp);
   EXPECT_DOUBLE_EQ(s.end(0), 0.0 - 0.5 * 0.02 * 4e-3);   // x- along x
   EXPECT_DOUBLE_EQ(s.end(6), 0.06 + 0.5 * 0.02 * 4e-3);  // x+ along x
   EXPECT_DOUBLE_EQ(s.end(13), 0.13 - 0.5 * 0.5 * 0.02 * 2e-3);
@@ -57,10 +61,7 @@ TEST(TestEdges, ABiaxialStepPullsEachPairOfEdgesApartByHalfItsElongation) {
 
 TEST(TestEdges, AUniaxialStepFreesTheWeftEdgeAlongTheWeft) {
   FourEdges s;
-  StepSpec st = test_step(StepSpec::Kind::Biaxial);
-  st.strain = 0.01;
-  st.ratio = 0.0;
-  test_edge_conditions(st, s.edges, s.force_end, s.disp);
+  test_edge_conditions(biaxial(0.01, 0.0), s.edges, s.force_end, s.disp);
   EXPECT_EQ(s.disp.count(19), 0u);
   EXPECT_DOUBLE_EQ(s.end(13), 0.13);  // y- held
   EXPECT_EQ(s.disp.size(), 35u);
