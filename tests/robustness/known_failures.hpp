@@ -41,8 +41,8 @@ inline constexpr KnownFailure kKnownFailures[] = {
      "uniform y or g1x over the beam's nodes, v.Hv ~ -1e-8 against a mean diagonal of 7e8) stall Newton: after "
      "5 cuts to load factor 0.031, the next increment's residual falls 0.40, 3.0e-5, 6.5e-7 and stays at 6.4e-7 "
      "for 22 iterations; 12 cuts. Solved as proximal increments instead (the case as a relax step) it converges in "
-     "9 increments, but the drag keeps 1 % of the pusher's force: the drag's tolerance is relative to a reference "
-     "force floored at 1e-5 E A of the stiffest fiber, 41 N here against a load of 0.62 N (as crossed_radius_ratio_20)"},
+     "9 increments, but the drag keeps 1 % of the pusher's force: the drag's tolerance (the step's, 1e-4) is "
+     "relative to a reference force floored at 1e-5 E A of the stiffest fiber, 41 N here against a load of 0.62 N"},
     {"crossed_radius_ratio_20",
      "converges, but b's equilibrium is resolved to 6.6e-6 of its 15 uN load only (the contact force differs "
      "from b's reactions by 2.3e-4): Newton's residual is measured against a floor of 1e-5 E A of the stiffest "
