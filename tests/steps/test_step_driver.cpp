@@ -250,7 +250,6 @@ TEST(StepDrivers, ATestRepeatsEachLevelUntilItSettles) {
   const double first = d.load_step(run, host);
   EXPECT_DOUBLE_EQ(first, 0.25);
   EXPECT_DOUBLE_EQ(run.relax_drag, 300.0);
-  EXPECT_TRUE(d.loading(first));
   const IncrementMode loading = d.mode(run, first);
   EXPECT_TRUE(loading.proximal && loading.test && loading.loading);
   EXPECT_DOUBLE_EQ(loading.drag, 300.0);
@@ -268,7 +267,6 @@ TEST(StepDrivers, ATestRepeatsEachLevelUntilItSettles) {
   d.grow(run, 14);
   EXPECT_DOUBLE_EQ(run.dl, 0.25);
   EXPECT_DOUBLE_EQ(d.load_step(run, host), 0.0);
-  EXPECT_FALSE(d.loading(0.0));
   EXPECT_FALSE(d.mode(run, 0.0).loading);
   // A settling increment that fails raises the drag but sets no floor above a loading one's.
   run.failed_floor = 0.0;

@@ -488,6 +488,10 @@ double StaticSolver::normal_update_residual() {
   return std::sqrt(res) / std::max(m_reference_force, 1e-300);
 }
 
+double StaticSolver::drag_residual(DragPart part) const {
+  return m_problem->drag_force_norm(m_q, m_force_scale, part) / std::max(m_reference_force, 1e-300);
+}
+
 bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, double& residual) {
   iterations = 0;
   const double tolerance = m_case.solver.binding_tolerance * m_model.length_scale * m_tolerance_scale;
@@ -1137,10 +1141,7 @@ class StaticSolver::DriverHost final : public StepHost {
       if (!fixed[d]) m_s.m_q[d] += scale * motion[d];
   }
   void predict_test_level(double lambda) override { m_s.predict_test_level(m_s.m_run.step, lambda); }
-  double drag_force_residual() const override {
-    return m_s.m_problem->drag_force_norm(m_s.m_q, m_s.m_force_scale, DragPart::Positions) /
-           std::max(m_s.m_reference_force, 1e-300);
-  }
+  double drag_force_residual() const override { return m_s.drag_residual(DragPart::Positions); }
   void release_positions(double lambda, int& iterations) override {
     m_s.release_positions(m_s.m_run.step, lambda, iterations);
   }
@@ -1172,7 +1173,6 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
     // predicted and judged, and when the step ends.
     const double k0 = m_contact ? m_contact->initial_stiffness() : 0.0;
     const std::unique_ptr<StepDriver> driver = StepDriver::make(st, opt, m_contact != nullptr, k0);
-    const bool proximal = driver->proximal();
     // A resumed run goes on within its step as the checkpoint left it.
     const bool resumed = m_resumed;
     m_resumed = false;
@@ -1293,7 +1293,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
           return fail(lambda + step_dl, history, fmt::format(
               "step \"{}\": the increment at load factor {:.6g} did not converge{} within {} Newton iterations (4 x "
               "max_iterations; last relative residual {:.3e}, tolerance {:.1e}), and there is nothing to cut: {}",
-              st.name, lambda, proximal ? fmt::format(" at the stiffest drag ({:.3g} N/m)", m_run.relax_drag) : "",
+              st.name, lambda, m_mode.proximal ? fmt::format(" at the stiffest drag ({:.3g} N/m)", m_run.relax_drag) : "",
               iterations, history.empty() ? 0.0 : history.back(), m_newton_tolerance,
               step_dl == 0.0 ? "its loads are held (a test level settling, or a relax step's end)"
                              : "a cut did not change its first residual (its loads do not change)"));
@@ -1344,10 +1344,9 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       info.increment_time = seconds_since(t_increment);
       info.step_end = lambda >= 1.0 && relaxed;
       info.settled = m_run.level_settled;
+      const bool proximal = m_mode.proximal;
       info.relax_residual = proximal ? m_run.relax_residual : 0.0;
-      info.spin_residual = proximal ? m_problem->drag_force_norm(m_q, m_force_scale, DragPart::Sections) /
-                                          std::max(m_reference_force, 1e-300)
-                                    : 0.0;
+      info.spin_residual = proximal ? drag_residual(DragPart::Sections) : 0.0;
       info.drag = solved.drag;
       info.reactions = reactions(m_gradient);
       if (m_bodies) {

@@ -106,6 +106,8 @@ class StaticSolver {
 
  private:
   class DriverHost;  // what a step driver asks of the solver (steps/step_driver.hpp)
+  /// The drag's force on `part` at the current state, relative to the reference force.
+  double drag_residual(DragPart part) const;
   /// Biaxial and shear steps: the edge bodies' conditions from their positions at the step's
   /// start (prescribed start and end values of the body dofs, into `disp`).
   void test_conditions(int step, std::map<Index, std::pair<double, double>>& disp) const;

@@ -147,7 +147,9 @@ int RelaxDriver::converged(SolverProgress& run, StepHost& host, const SolvedIncr
   // relax step or settles a test level is then solved on with the positions released
   // (release_positions).
   run.relax_residual = host.drag_force_residual();
-  if (loading(inc.step_dl)) run.load_residual = run.relax_residual;
+  // A test level's loading increment: its drag force is what the next increments' solves are
+  // measured against (solve_increment, method.test_inexact), the release's included.
+  if (mode(run, inc.step_dl).loading) run.load_residual = run.relax_residual;
   const double lambda_end = run.lambda + inc.step_dl;
   const bool release = settle(run, lambda_end);
   // A relax step's settling increment (it measured the residual with its updated normals and
@@ -218,7 +220,7 @@ void TestDriver::predict(const SolverProgress& run, StepHost& host, double step_
 IncrementMode TestDriver::mode(const SolverProgress& run, double step_dl) const {
   IncrementMode m = RelaxDriver::mode(run, step_dl);
   m.test = true;
-  m.loading = loading(step_dl);
+  m.loading = step_dl > 0.0;  // the level's first increment: it moves the edges
   return m;
 }
 

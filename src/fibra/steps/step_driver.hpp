@@ -81,8 +81,6 @@ class StepDriver {
   static std::unique_ptr<StepDriver> make(const StepSpec& st, const SolverSpec& opt, bool contact, double k0);
   virtual ~StepDriver() = default;
 
-  /// The step's increments take a proximal drag that adapts (relax and test steps).
-  virtual bool proximal() const { return false; }
   /// A fresh step: the rules' starting values in `run` (the solver has reset the rest).
   virtual void begin(SolverProgress& run) const { run.relaxed = true; }
   /// Before an increment: sets its size in `run.dl` and returns its load step (`run.dl`, or 0
@@ -90,11 +88,6 @@ class StepDriver {
   virtual double load_step(SolverProgress& run, StepHost& host) const;
   /// Before an increment, once its start is saved: moves the state it is solved from.
   virtual void predict(const SolverProgress& run, StepHost& host, double step_dl) const;
-  /// The increment about to be solved moves a test's edges (a level's loading increment).
-  virtual bool loading(double step_dl) const {
-    (void)step_dl;
-    return false;
-  }
   /// How the increment about to be solved, with load step `step_dl`, is solved.
   virtual IncrementMode mode(const SolverProgress& run, double step_dl) const {
     (void)run;
@@ -160,7 +153,6 @@ class WeaveDriver : public StepDriver {
 class RelaxDriver : public StepDriver {
  public:
   RelaxDriver(const StepSpec& st, const SolverSpec& opt, double k0);
-  bool proximal() const override { return true; }
   void begin(SolverProgress& run) const override;
   IncrementMode mode(const SolverProgress& run, double step_dl) const override;
   bool failed(SolverProgress& run, double step_dl) const override;
@@ -188,7 +180,6 @@ class TestDriver : public RelaxDriver {
   TestDriver(const StepSpec& st, const SolverSpec& opt, double k0) : RelaxDriver(st, opt, k0) {}
   double load_step(SolverProgress& run, StepHost& host) const override;
   void predict(const SolverProgress& run, StepHost& host, double step_dl) const override;
-  bool loading(double step_dl) const override { return step_dl > 0.0; }
   IncrementMode mode(const SolverProgress& run, double step_dl) const override;
   int converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const override;
   void grow(SolverProgress& run, int iterations) const override;
