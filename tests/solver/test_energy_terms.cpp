@@ -18,6 +18,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <random>
+#include <stdexcept>
 #include <string>
 
 #include "fibra/body/bodies.hpp"
@@ -485,6 +486,100 @@ TEST(EnergyTerms, ProblemIsTheSumOfItsTerms) {
     sum += h.energy(q);
   }
   EXPECT_NEAR(total, sum, 1e-12 * std::abs(total));
+}
+
+// The hooks by which the solver handles a term's lagged state (assembly/energy_term.hpp).
+TEST(EnergyTerms, ContactStateIsSavedRestoredAndCommitted) {
+  std::mt19937 rng(11);
+  Crossing x(rng, 3);
+  for (int k = 0; k < 3; ++k) x.set_slip(k, k == 2 ? 3.0 : 0.4, rng);
+  x.set_gap(0, -2e-6);
+  for (ContactElement& e : x.elements) e.fresh = true;
+  Problem p(x.model);
+  const ContactTerm& term = dynamic_cast<const ContactTerm&>(*p.terms()[1]);
+  ASSERT_TRUE(p.set_contacts(x.elements, x.friction));
+  const Index nonzeros = p.pattern().nonzeros();
+  // No solution recorded: nothing to commit from.
+  VecX q = x.q;
+  p.set_contact_solution({});
+  EXPECT_THROW(p.commit(q), std::logic_error);
+  const std::vector<ContactResponse> solution = p.contact_responses(x.q);
+  p.set_contact_solution(solution);
+  const LaggedStates saved = p.save_lagged();
+  const double energy = p.evaluate(x.q, nullptr, nullptr);  // with the saved friction history
+  p.commit(q);
+  EXPECT_EQ(q, x.q);  // the contact term's dofs are positions: nothing rewritten
+  const std::vector<ContactResponse> after = p.contact_responses(x.q);
+  for (size_t k = 0; k < 3; ++k) {
+    const ContactElement& c = term.contacts()[k];
+    EXPECT_FALSE(c.fresh);
+    EXPECT_EQ(c.friction_previous, solution[k].friction);
+    EXPECT_EQ(c.separation_previous, particle_position(c.b, x.q.data() + 27) - particle_position(c.a, x.q.data()));
+    // Committed at q, the friction force at q is the one committed, in stick and in slip.
+    EXPECT_LT((after[k].friction - solution[k].friction).norm(), 1e-12 * solution[k].friction.norm()) << k;
+  }
+  // Other elements (another pattern), then the saved ones back: pattern and energy as before.
+  EXPECT_TRUE(p.set_contacts({}, x.friction));
+  EXPECT_LT(p.pattern().nonzeros(), nonzeros);
+  EXPECT_TRUE(p.restore_lagged(saved));
+  EXPECT_EQ(p.pattern().nonzeros(), nonzeros);
+  ASSERT_EQ(term.contacts().size(), 3u);
+  for (size_t k = 0; k < 3; ++k) {
+    EXPECT_TRUE(term.contacts()[k].fresh);
+    EXPECT_EQ(term.contacts()[k].friction_previous, x.elements[k].friction_previous);
+  }
+  EXPECT_EQ(term.solution().size(), 3u);
+  EXPECT_EQ(p.evaluate(x.q, nullptr, nullptr), energy);
+  // Restored with the same element pairs: the pattern stays.
+  EXPECT_FALSE(p.restore_lagged(saved));
+}
+
+TEST(EnergyTerms, ContactBoundsTheNewtonStep) {
+  std::mt19937 rng(12);
+  Crossing x(rng, 1);
+  Problem p(x.model);
+  const Index n = x.model.num_dofs();
+  VecX dq = VecX::Zero(n);
+  dq[4] = -4e-3;  // a section vector's component: moves its tip by 4e-3 * its length scale
+  EXPECT_EQ(p.step_bound(x.q, dq), 1.0);  // no limit set
+  VecX scale = VecX::Ones(n);
+  scale[4] = 0.5;
+  p.set_step_limit(1e-3, scale);
+  EXPECT_DOUBLE_EQ(p.step_bound(x.q, dq), 0.5);  // 1e-3 / (4e-3 * 0.5)
+  dq[4] = 1e-4;
+  EXPECT_EQ(p.step_bound(x.q, dq), 1.0);
+}
+
+TEST(EnergyTerms, BindingStateIsSavedRestoredAndCommitted) {
+  const Case c = parse_case_toml(kBodies, "bodies.toml");
+  const Model model = build_model(c);
+  BodySystem bodies(c, model);
+  Problem p(model, &bodies);
+  std::mt19937 rng(13);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<double> lambda = bodies.multipliers();
+  for (double& l : lambda) l = normal(rng);
+  bodies.set_multipliers(lambda);
+  const LaggedStates saved = p.save_lagged();
+  // An increment's rotation committed: the bodies' rotation dofs start the next one at zero.
+  VecX q = model.reference;
+  std::vector<Vec3> theta;
+  for (const Body& b : model.bodies) {
+    theta.push_back(Vec3(normal(rng), normal(rng), normal(rng)) * 0.2);
+    q.segment<3>(b.first_dof + 3) = theta.back();
+  }
+  p.commit(q);
+  for (Index b = 0; b < static_cast<Index>(model.bodies.size()); ++b) {
+    EXPECT_TRUE(q.segment<3>(model.bodies[b].first_dof + 3).isZero(0.0));
+    EXPECT_EQ(bodies.committed_rotation(b), theta[b]);
+  }
+  std::vector<double> other = lambda;
+  for (double& l : other) l += 1.0;
+  bodies.set_multipliers(other);
+  EXPECT_FALSE(p.restore_lagged(saved));
+  EXPECT_EQ(bodies.multipliers(), lambda);
+  for (Index b = 0; b < static_cast<Index>(model.bodies.size()); ++b)
+    EXPECT_TRUE(bodies.committed_rotation(b).isZero(0.0));
 }
 
 }  // namespace

@@ -1,9 +1,12 @@
 #pragma once
 /// One term of the total potential that each increment minimizes (beam elasticity, contact
 /// and friction, averaged bindings, the proximal drag, the external work): its energy, its
-/// gradient and Hessian added into a global assembly, and its local Hessians. `Problem`
-/// (solver/problem.hpp) is the sum of its terms; the solver knows no term by its physics.
+/// gradient and Hessian added into a global assembly, its local Hessians, and the hooks by
+/// which the solver handles its lagged state (saved, put back, committed) and its bound on a
+/// Newton step. `Problem` (solver/problem.hpp) is the sum of its terms; the solver knows no
+/// term by its physics.
 #include <Eigen/Core>
+#include <memory>
 #include <span>
 #include <string>
 
@@ -11,6 +14,15 @@
 #include "fibra/assembly/block_pattern.hpp"
 
 namespace fibra {
+
+/// What a term holds fixed through a minimization and changes only between minimizations or at
+/// an increment's end (contact elements with their normals, penalties and friction history; the
+/// bindings' multipliers and the bodies' committed frames): saved before an increment, put back
+/// when it fails. Each term defines its own.
+class LaggedState {
+ public:
+  virtual ~LaggedState() = default;
+};
 
 /// An energy term on the model's dofs (9 per node, then 6 per rigid body).
 class EnergyTerm {
@@ -38,6 +50,26 @@ class EnergyTerm {
     (void)k;
     (void)q;
     return {};
+  }
+
+  /// The term's lagged state, to be put back by restore(); null for a term without one.
+  virtual std::unique_ptr<LaggedState> save() const { return nullptr; }
+  /// Puts back a state that save() returned; true when the term's stencils changed with it (the
+  /// sparsity pattern must then be rebuilt).
+  virtual bool restore(const LaggedState& state) {
+    (void)state;
+    return false;
+  }
+  /// Ends a converged increment at q: the term's history takes q's values (friction's previous
+  /// force, a body's committed rotation). A term whose dofs hold increments of its history
+  /// rewrites them in q (a body's rotation dofs start the next increment at zero).
+  virtual void commit(VecX& q) { (void)q; }
+  /// The largest fraction in (0, 1] of the Newton correction dq from q that the term allows
+  /// (1: no bound).
+  virtual double step_bound(const VecX& q, const VecX& dq) const {
+    (void)q;
+    (void)dq;
+    return 1.0;
   }
 };
 

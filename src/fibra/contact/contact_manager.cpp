@@ -275,17 +275,6 @@ int ContactManager::soften_penalty(std::vector<ContactElement>& contacts, const 
   return static_cast<int>(softened.size());
 }
 
-void ContactManager::commit(std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses,
-                            const VecX& q) const {
-  for (size_t k = 0; k < contacts.size(); ++k) {
-    ContactElement& c = contacts[k];
-    c.friction_previous = responses[k].friction;
-    c.separation_previous = particle_position(c.b, q.data() + m_model.elements[c.b.element].first_dof) -
-                            particle_position(c.a, q.data() + m_model.elements[c.a.element].first_dof);
-    c.fresh = false;
-  }
-}
-
 bool ContactManager::passed_through(const std::vector<ContactElement>& contacts,
                                     const std::vector<ContactResponse>& responses,
                                     std::pair<Index, Index>* where) const {

@@ -1,7 +1,7 @@
 #pragma once
 /// Contact bookkeeping between the solver's loops (METHOD §3-4): builds contact elements from a
 /// detection (laws, history carried over), updates normals, adapts the penalty per proximity
-/// zone, and commits friction history at convergence.
+/// zone. The contact energy term commits the friction history (terms/contact_term.hpp).
 #include <functional>
 #include <map>
 #include <memory>
@@ -63,9 +63,6 @@ class ContactManager {
   /// the zones softened.
   int soften_penalty(std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses,
                      double floor) const;
-  /// Stores the converged friction forces and separations as history.
-  void commit(std::vector<ContactElement>& contacts, const std::vector<ContactResponse>& responses,
-              const VecX& q) const;
   /// True if a contact element without history penetrates deeper than a fiber can within one
   /// increment (a crossing missed between detections).
   /// `where`, when set, receives the element pair of the first such element.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <stdexcept>
 #include <string>
 
 #include <Eigen/Eigenvalues>
@@ -41,6 +42,32 @@ bool Problem::set_contacts(std::vector<ContactElement> contacts, const FrictionP
   const bool changed = m_contact.set_contacts(std::move(contacts), friction);
   if (changed) build_pattern();
   return changed;
+}
+
+LaggedStates Problem::save_lagged() const {
+  LaggedStates s;
+  for (const EnergyTerm* t : m_terms) s.terms.push_back(t->save());
+  return s;
+}
+
+bool Problem::restore_lagged(const LaggedStates& states) {
+  if (states.terms.size() != m_terms.size())
+    throw std::logic_error("Problem::restore_lagged: a state of another problem");
+  bool changed = false;
+  for (size_t k = 0; k < m_terms.size(); ++k)
+    if (states.terms[k]) changed = m_terms[k]->restore(*states.terms[k]) || changed;
+  if (changed) build_pattern();
+  return changed;
+}
+
+void Problem::commit(VecX& q) {
+  for (EnergyTerm* t : m_terms) t->commit(q);
+}
+
+double Problem::step_bound(const VecX& q, const VecX& dq) const {
+  double bound = 1.0;
+  for (const EnergyTerm* t : m_terms) bound = std::min(bound, t->step_bound(q, dq));
+  return bound;
 }
 
 double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hessian) {

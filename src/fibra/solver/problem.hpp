@@ -20,6 +20,11 @@
 
 namespace fibra {
 
+/// The lagged state of each term of a Problem (EnergyTerm::save), in the order of its terms.
+struct LaggedStates {
+  std::vector<std::unique_ptr<LaggedState>> terms;
+};
+
 /// Accumulated wall times of the assembly [s].
 struct AssemblyTimes {
   double assembly = 0;  ///< element and load evaluation + scatter
@@ -53,6 +58,22 @@ class Problem {
   std::vector<ContactElement>& contacts() { return m_contact.contacts(); }              ///< (normals, laws, history)
   /// Evaluated state of every contact element at q (same order as contacts()).
   std::vector<ContactResponse> contact_responses(const VecX& q) const { return m_contact.responses(q); }
+  /// Records the contact elements' responses at a minimization's solution (ContactTerm::set_solution).
+  void set_contact_solution(std::vector<ContactResponse> r) { m_contact.set_solution(std::move(r)); }
+  /// The responses set_contact_solution recorded.
+  const std::vector<ContactResponse>& contact_solution() const { return m_contact.solution(); }
+  /// Bounds a Newton step: no dof d moves more than `max_move` / `length_scale`[d] (ContactTerm).
+  void set_step_limit(double max_move, VecX length_scale) { m_contact.set_step_limit(max_move, std::move(length_scale)); }
+
+  /// Every term's lagged state (EnergyTerm::save).
+  LaggedStates save_lagged() const;
+  /// Puts back what save_lagged() returned; true when the sparsity pattern changed with it (the
+  /// linear solver's analysis must then be redone).
+  bool restore_lagged(const LaggedStates& states);
+  /// Ends a converged increment at q: every term commits its history (EnergyTerm::commit).
+  void commit(VecX& q);
+  /// The largest fraction in (0, 1] of the Newton correction dq from q that every term allows.
+  double step_bound(const VecX& q, const VecX& dq) const;
 
   /// Drag (weave, relax and test steps), DragTerm::set: c = 0 removes it.
   void set_drag(double c, const VecX& anchor, double director_weight = 1.0, double axial_weight = 1.0,

@@ -120,9 +120,10 @@ StaticSolver::StaticSolver(const Case& c, const Model& model, std::unique_ptr<Bo
     double rmin = std::numeric_limits<double>::infinity();
     for (const Fiber& f : model.fibers)
       rmin = std::min(rmin, std::sqrt(model.sections[f.section].a * model.sections[f.section].b));
-    m_max_step = c.solver.method.max_step >= 0.0 ? c.solver.method.max_step : 0.5 * rmin;
+    m_problem->set_step_limit(c.solver.method.max_step >= 0.0 ? c.solver.method.max_step : 0.5 * rmin,
+                              m_length_scale);
   } else {
-    m_max_step = std::max(0.0, c.solver.method.max_step);
+    m_problem->set_step_limit(std::max(0.0, c.solver.method.max_step), m_length_scale);
   }
   m_q_start = m_q;
   m_drag_anchor = m_q;
@@ -420,7 +421,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
       }
       // Nothing changed since `responses` (same state, elements, normals and penalties).
       m_contact->add_stats(m_problem->contacts(), responses, m_contact_stats);
-      m_contact_responses = responses;
+      m_problem->set_contact_solution(responses);
       // Pseudo-time increments of relax and test steps also soften the zones that penetrate
       // far less than allowed: the weave leaves penalties raised up to ~100 k0 to push the tows
       // through each other (median 30 k0 on the 3 x 3 x 16 bench case), 30 times stiffer than
@@ -829,15 +830,10 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     // a fiber that nothing holds yet (zero contact stiffness at first touch, a member free in
     // its averaged binding) gets a huge linearized step that would jump through its
     // neighbours; limited, it moves until contact stiffens it.
-    if (m_max_step > 0.0) {
-      double largest = 0.0;
-      for (Index d = 0; d < n; ++d) largest = std::max(largest, std::abs(dq[d]) * m_length_scale[d]);
-      if (largest > m_max_step) {
-        alpha = m_max_step / largest;
-        dq *= alpha;
-        alpha = 1.0;
-        ++m_stats.limited_steps;
-      }
+    // (The contact term's bound, ContactTerm::step_bound.)
+    if (const double bound = m_problem->step_bound(m_q, dq); bound < 1.0) {
+      dq *= bound;
+      ++m_stats.limited_steps;
     }
     trial = m_q + dq;
     if (opt.method.line_search && stalled && s0 < 0.0) {
@@ -1093,9 +1089,7 @@ void StaticSolver::resume(const SolverState& state, const SolverProgress& p) {
 bool StaticSolver::release_positions(int step, double lambda, int& iterations) {
   // What the increment left, put back should the release not converge.
   const VecX q = m_q, gradient = m_gradient;
-  const std::vector<ContactElement> contacts = m_problem->contacts();
-  const std::vector<double> bodies = m_bodies ? m_bodies->snapshot() : std::vector<double>{};
-  const std::vector<ContactResponse> responses = m_contact_responses;
+  const LaggedStates lagged = m_problem->save_lagged();
   const ContactStats contact_stats = m_contact_stats;
   const int binding_updates = m_binding_updates;
   const double reference = m_reference_force, drag = m_problem->drag(), director = m_problem->drag_director_weight(),
@@ -1119,10 +1113,8 @@ bool StaticSolver::release_positions(int step, double lambda, int& iterations) {
   }
   m_q = q;
   m_gradient = gradient;
-  if (m_bodies) m_bodies->restore(bodies);
-  if (m_contact && m_problem->set_contacts(contacts, m_contact->friction())) m_linear->analyze(m_problem->pattern());
+  if (m_problem->restore_lagged(lagged)) m_linear->analyze(m_problem->pattern());
   m_problem->set_drag(drag, drag_anchor, director, axial);
-  m_contact_responses = responses;
   m_contact_stats = contact_stats;
   m_binding_updates = binding_updates;
   m_reference_force = reference;
@@ -1239,8 +1231,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       m_q_start = m_q;
       driver->predict(m_run, host, step_dl);
       m_drag_anchor = m_q;
-      const std::vector<ContactElement> saved_contacts = m_contact ? m_problem->contacts() : std::vector<ContactElement>{};
-      const std::vector<double> saved_multipliers = m_bodies ? m_bodies->multipliers() : std::vector<double>{};
+      const LaggedStates saved_lagged = m_problem->save_lagged();
       std::vector<double> history;
       int iterations = 0;
       double residual = 0.0;
@@ -1260,9 +1251,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         failed_state = m_q;
         failed_refusal = m_refusal;
         m_q = saved;
-        if (m_bodies) m_bodies->set_multipliers(saved_multipliers);
-        if (m_contact && m_problem->set_contacts(saved_contacts, m_contact->friction()))
-          m_linear->analyze(m_problem->pattern());
+        if (m_problem->restore_lagged(saved_lagged)) m_linear->analyze(m_problem->pattern());
         ++m_stats.cuts;
         if (step_dl > 0.0) ++m_run.level_failures;
         const bool stiffer = driver->failed(m_run, step_dl);
@@ -1359,7 +1348,6 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
             info.reactions.insert(info.reactions.end(), v->data(), v->data() + 3);
           info.bodies.push_back(bs);
         }
-        m_bodies->commit(m_q);
       }
       if (m_contact && debug_newton()) {
         std::vector<double> ks;
@@ -1370,10 +1358,10 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
                      ks[ks.size() * 9 / 10], ks[ks.size() * 99 / 100], ks.back());
       }
       if (m_contact) {
-        info.contact_responses = m_contact_responses;
-        m_contact->commit(m_problem->contacts(), info.contact_responses, m_q);
+        info.contact_responses = m_problem->contact_solution();
         info.contact = m_contact_stats;
       }
+      m_problem->commit(m_q);
       m_stats.time_assembly = m_problem->times().assembly;
       if (m_progress)
         m_progress(fmt::format("step {} \"{}\"  load {:6.4f}  iterations {:2d}  residual {:.2e}  {:7.2f} s", step + 1,

@@ -174,7 +174,6 @@ class StaticSolver {
   std::unique_ptr<Program> m_program;
   std::unique_ptr<ContactManager> m_contact;  // null without [contact]
   ContactStats m_contact_stats;
-  std::vector<ContactResponse> m_contact_responses;  // at the accepted state of the increment
   VecX m_q;
   VecX m_q_start;  // state at the start of the current increment (friction slips, crossings)
   VecX m_drag_anchor;  // where the drag pulls: the increment's start, or a test level's predicted state
@@ -187,7 +186,6 @@ class StaticSolver {
   std::vector<Index> m_reaction_nodes;
   int m_binding_updates = 0;  // in the current increment
   std::string m_refusal;      // why the contact loop refused the current increment (empty: it did not)
-  double m_max_step = 0;      // largest nodal motion per Newton iteration [m]; 0 = no limit
   std::vector<std::pair<int, int>> m_fiber_tow;  // per fiber: (0 warp / 1 weft / -1 none, tow index)
   double m_test_drag = 0;        // drag that applied the last test level, of this run or its start's [N/m]
   bool m_reuse_factor = false;    // the last factorization may precondition the next Newton solve

@@ -20,8 +20,23 @@ class BindingTerm final : public EnergyTerm {
   Index num_local() const override { return m_bodies.num_bindings(); }
   std::span<const Index> local_groups(Index k) const override { return m_bodies.stencils().stencil(k); }
   Eigen::MatrixXd local_hessian(Index k, const VecX& q) const override { return m_bodies.local_hessian(k, q); }
+  /// The bodies' committed frames and rotations and the bindings' multipliers (a snapshot).
+  std::unique_ptr<LaggedState> save() const override {
+    auto s = std::make_unique<State>();
+    s->values = m_bodies.snapshot();
+    return s;
+  }
+  bool restore(const LaggedState& state) override {
+    m_bodies.restore(dynamic_cast<const State&>(state).values);
+    return false;
+  }
+  /// The bodies' rotations are committed; their rotation dofs start the next increment at zero.
+  void commit(VecX& q) override { m_bodies.commit(q); }
 
  private:
+  struct State final : LaggedState {
+    std::vector<double> values;
+  };
   BodySystem& m_bodies;
 };
 

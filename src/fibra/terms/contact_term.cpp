@@ -1,6 +1,8 @@
 #include "fibra/terms/contact_term.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <stdexcept>
 
 namespace fibra {
 
@@ -36,6 +38,50 @@ bool ContactTerm::set_contacts(std::vector<ContactElement> contacts, const Frict
     m_pairs = std::move(pairs);
   }
   return changed;
+}
+
+namespace {
+
+struct ContactState final : LaggedState {
+  std::vector<ContactElement> contacts;
+  FrictionParams friction;
+  std::vector<ContactResponse> solution;
+};
+
+}  // namespace
+
+std::unique_ptr<LaggedState> ContactTerm::save() const {
+  auto s = std::make_unique<ContactState>();
+  s->contacts = m_contacts;
+  s->friction = m_friction;
+  s->solution = m_solution;
+  return s;
+}
+
+bool ContactTerm::restore(const LaggedState& state) {
+  const auto& s = dynamic_cast<const ContactState&>(state);
+  m_solution = s.solution;
+  return set_contacts(s.contacts, s.friction);
+}
+
+void ContactTerm::commit(VecX& q) {
+  if (m_solution.size() != m_contacts.size())
+    throw std::logic_error("ContactTerm::commit: no solution recorded for the current contact elements");
+  for (size_t k = 0; k < m_contacts.size(); ++k) {
+    ContactElement& c = m_contacts[k];
+    c.friction_previous = m_solution[k].friction;
+    c.separation_previous = particle_position(c.b, q.data() + m_model.elements[c.b.element].first_dof) -
+                            particle_position(c.a, q.data() + m_model.elements[c.a.element].first_dof);
+    c.fresh = false;
+  }
+}
+
+double ContactTerm::step_bound(const VecX& q, const VecX& dq) const {
+  (void)q;
+  if (!(m_max_move > 0.0)) return 1.0;
+  double largest = 0.0;
+  for (Index d = 0; d < dq.size(); ++d) largest = std::max(largest, std::abs(dq[d]) * m_length_scale[d]);
+  return largest > m_max_move ? m_max_move / largest : 1.0;
 }
 
 double ContactTerm::assemble(const VecX& q, const AssemblyTarget& target) {

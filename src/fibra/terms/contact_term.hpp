@@ -2,7 +2,10 @@
 /// Contact and friction: the penalty energy of every contact element and its frozen friction
 /// energy (docs/theory/contact.md), kernels on the 6-node stencil of an element pair, summed
 /// pair by pair. The elements (normals, laws, friction history) are lagged: they change only
-/// between minimizations (set_contacts).
+/// between minimizations (set_contacts), and an increment's end commits their friction history
+/// from the responses of its solution (set_solution). The term also bounds a Newton step: no
+/// point moves further than the step limit, so that a fiber nothing holds yet does not jump
+/// through its neighbours.
 #include <vector>
 
 #include "fibra/assembly/energy_term.hpp"
@@ -33,12 +36,34 @@ class ContactTerm final : public EnergyTerm {
   /// Evaluated state of every contact element at q (same order as contacts()).
   std::vector<ContactResponse> responses(const VecX& q) const;
 
+  /// Records the responses of the elements at the solution of a minimization (same order as
+  /// contacts()), from which commit() takes the friction history.
+  void set_solution(std::vector<ContactResponse> responses) { m_solution = std::move(responses); }
+  /// The responses set_solution recorded.
+  const std::vector<ContactResponse>& solution() const { return m_solution; }
+  /// No dof d moves more than `max_move` / `length_scale`[d] in a Newton step (0: no bound).
+  void set_step_limit(double max_move, VecX length_scale) {
+    m_max_move = max_move;
+    m_length_scale = std::move(length_scale);
+  }
+
+  /// The elements, the friction parameters and the solution's responses.
+  std::unique_ptr<LaggedState> save() const override;
+  bool restore(const LaggedState& state) override;
+  /// Each element's previous friction force (the solution's) and separation (at q); no element
+  /// is fresh any more.
+  void commit(VecX& q) override;
+  double step_bound(const VecX& q, const VecX& dq) const override;
+
  private:
   const Model& m_model;
   StencilSet m_pairs;               // one stencil per element pair in contact (6 nodes)
   std::vector<Index> m_pair_begin;  // contacts of pair s: [m_pair_begin[s], m_pair_begin[s+1])
   std::vector<ContactElement> m_contacts;
   FrictionParams m_friction;
+  std::vector<ContactResponse> m_solution;  // responses at the last minimization's solution
+  double m_max_move = 0;                    // step limit [m]; 0 = none
+  VecX m_length_scale;                      // per dof: length of a unit of the dof [m]
   std::vector<double> m_energy_buffer;
 };
 
