@@ -9,6 +9,8 @@
 #include <string>
 #include <utility>
 
+#include "fibra/io/case_reader.hpp"
+#include "fibra/model/model.hpp"
 #include "fibra/steps/test_edges.hpp"
 
 namespace fibra::test {
@@ -95,6 +97,87 @@ TEST(TestEdges, AShearWithItsHeightFreeNeedsAForceAcross) {
   st.angle = 5.0;
   st.free_height = true;
   EXPECT_THROW(test_edge_conditions(st, s.edges, s.force_end, s.disp), std::logic_error);
+}
+
+// The edge bodies found in a model by their names, with the bodies bound to x- and x+ in the
+// order of the bindings; none without all four.
+TEST(TestEdges, TheEdgeBodiesAreFoundWithTheBodiesBoundToThem) {
+  std::string text = R"(
+[[material]]
+name = "m"
+young = 1e9
+poisson = 0.3
+[[fiber]]
+name = "a"
+material = "m"
+radius = 0.01
+elements = 1
+points = [[0, 0, 0], [1, 0, 0]]
+[[fiber]]
+name = "b"
+material = "m"
+radius = 0.01
+elements = 1
+points = [[0, 0.1, 0], [1, 0.1, 0]]
+[[body]]
+name = "end.a0"
+center = [0, 0, 0]
+[[body]]
+name = "end.b0"
+center = [0, 0.1, 0]
+[[body]]
+name = "end.a1"
+center = [1, 0, 0]
+[[binding]]
+body = "end.a0"
+ends = [{ fiber = "a", node = "first" }]
+[[binding]]
+body = "end.b0"
+ends = [{ fiber = "b", node = "first" }]
+[[binding]]
+body = "end.a1"
+ends = [{ fiber = "a", node = "last" }]
+[[body]]
+name = "edge.y-"
+center = [0.5, -0.1, 0]
+[[body]]
+name = "edge.x+"
+center = [1, 0.05, 0]
+[[body]]
+name = "edge.x-"
+center = [0, 0.05, 0]
+)";
+  const std::string edge_yplus = R"(
+[[body]]
+name = "edge.y+"
+center = [0.5, 0.2, 0]
+[[binding]]
+body = "edge.x-"
+bodies = ["end.b0", "end.a0"]
+[[binding]]
+body = "edge.x+"
+bodies = ["end.a1"]
+[[step]]
+name = "s"
+)";
+  {
+    const Case c = parse_case_toml(text + "[[step]]\nname = \"s\"\n", "three_edges.toml");
+    EXPECT_FALSE(find_test_edges(c, build_model(c)).has_value());
+  }
+  const Case c = parse_case_toml(text + edge_yplus, "edges.toml");
+  const Model model = build_model(c);
+  const std::optional<TestEdges> edges = find_test_edges(c, model);
+  ASSERT_TRUE(edges.has_value());
+  const char* names[4] = {"edge.x-", "edge.x+", "edge.y-", "edge.y+"};
+  for (int e = 0; e < 4; ++e) {
+    EXPECT_EQ(edges->body[e], model.body_index(names[e])) << names[e];
+    EXPECT_EQ(edges->first_dof[e], model.bodies[edges->body[e]].first_dof) << names[e];
+  }
+  auto dof = [&](const char* name) { return model.bodies[model.body_index(name)].first_dof; };
+  EXPECT_EQ(edges->bound[0], (std::vector<Index>{dof("end.b0"), dof("end.a0")}));
+  EXPECT_EQ(edges->bound[1], (std::vector<Index>{dof("end.a1")}));
+  EXPECT_EQ(edges->lx, 0.0);
+  EXPECT_EQ(edges->ly, 0.0);
 }
 
 }  // namespace

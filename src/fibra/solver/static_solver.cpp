@@ -108,6 +108,7 @@ StaticSolver::StaticSolver(const Case& c, const Model& model, std::unique_ptr<Bo
       }
   }
   // Weaving: the tow (direction, index) of every fiber.
+  m_edges = find_test_edges(c, model);
   m_fiber_tow.assign(model.fibers.size(), {-1, -1});
   for (size_t t = 0; t < c.tows.size(); ++t)
     for (const std::string& name : c.tows[t].fibers) {
@@ -869,26 +870,13 @@ void StaticSolver::test_conditions(int step, std::map<Index, std::pair<double, d
   // METHOD §7. The fabric's edge bodies are driven from where they are at the step's start:
   // strains and angles are measured from there, not from the flat starting assembly
   // (steps/test_edges.hpp).
-  TestEdges edges;
-  int edge[4];
-  for (int e = 0; e < 4; ++e) {
-    edge[e] = m_model.body_index(kEdgeBodies[e]);
-    if (edge[e] < 0) throw std::logic_error("StaticSolver: a test step without edge bodies (resolve_case checks it)");
-    edges.first_dof[e] = m_model.bodies[edge[e]].first_dof;
-  }
-  for (int e : {0, 1})
-    for (const BindingSpec& b : m_case.bindings) {
-      if (b.body != kEdgeBodies[e]) continue;
-      for (const std::string& child : b.bodies) {
-        const int cb = m_model.body_index(child);
-        if (cb >= 0) edges.bound[e].push_back(m_model.bodies[cb].first_dof);
-      }
-    }
+  if (!m_edges) throw std::logic_error("StaticSolver: a test step without edge bodies (resolve_case checks it)");
+  TestEdges edges = *m_edges;
   auto u = [&](Index d) { return m_q[d] - m_model.reference[d]; };
   // Every component held where it is; the test's conditions then drive some and free others.
   for (int e = 0; e < 4; ++e) {
     const Index d0 = edges.first_dof[e];
-    const Vec3 rotation = m_bodies->rotation(edge[e], m_q);
+    const Vec3 rotation = m_bodies->rotation(edges.body[e], m_q);
     for (int k = 0; k < 3; ++k) {
       disp[d0 + k] = {u(d0 + k), u(d0 + k)};
       disp[d0 + 3 + k] = {rotation[k], rotation[k]};
@@ -902,7 +890,7 @@ void StaticSolver::test_conditions(int step, std::map<Index, std::pair<double, d
 void StaticSolver::predict_test_level(int step, double lambda) {
   const VecX before = m_q;  // once per load level
   apply(step, lambda);
-  fibra::predict_test_level(m_model, m_bodies.get(), m_case.steps[step], m_program->disp, m_problem->fixed(), before,
+  fibra::predict_test_level(m_model, m_bodies.get(), m_edges ? &*m_edges : nullptr, m_case.steps[step], m_program->disp, m_problem->fixed(), before,
                             m_q);
 }
 

@@ -5,6 +5,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,7 @@
 #include "fibra/solver/solver_state.hpp"
 #include "fibra/solver/stall_diagnosis.hpp"
 #include "fibra/steps/step_driver.hpp"
+#include "fibra/steps/test_edges.hpp"
 
 namespace fibra {
 
@@ -187,6 +189,7 @@ class StaticSolver {
   int m_binding_updates = 0;  // in the current increment
   std::string m_refusal;      // why the contact loop refused the current increment (empty: it did not)
   std::vector<std::pair<int, int>> m_fiber_tow;  // per fiber: (0 warp / 1 weft / -1 none, tow index)
+  std::optional<TestEdges> m_edges;  // the fabric's edge bodies (tests), nullopt without them
   double m_test_drag = 0;        // drag that applied the last test level, of this run or its start's [N/m]
   bool m_reuse_factor = false;    // the last factorization may precondition the next Newton solve
   double m_last_shift = 0;        // last shift a factorization needed, relative to its tangent's mean diagonal

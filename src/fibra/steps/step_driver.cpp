@@ -152,11 +152,11 @@ int RelaxDriver::converged(SolverProgress& run, StepHost& host, const SolvedIncr
   if (mode(run, inc.step_dl).loading) run.load_residual = run.relax_residual;
   const double lambda_end = run.lambda + inc.step_dl;
   const bool release = settle(run, lambda_end);
-  // A relax step's settling increment (it measured the residual with its updated normals and
-  // cones) that ended with them unsettled creeps on if that residual is not at least half the
-  // last such increment's.
+  // A settling increment (it measured the residual with its updated normals and cones) that
+  // ended with them unsettled creeps on if that residual is not at least half the last such
+  // increment's.
   bool creeping = false;
-  if (!m_step.is_test() && inc.settling_moved >= 0.0) {
+  if (releases_creep() && inc.settling_moved >= 0.0) {
     creeping = !run.normals_settled && inc.settling_moved > 0.5 * run.settling_residual;
     run.settling_residual = inc.settling_moved;
   }

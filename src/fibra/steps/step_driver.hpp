@@ -167,6 +167,9 @@ class RelaxDriver : public StepDriver {
     (void)step_dl;
     return true;
   }
+  /// Whether a settling increment whose residual with updated normals and cones does not halve
+  /// lets the drag fall (the relax's creep rule, RelaxDriver::converged).
+  virtual bool releases_creep() const { return true; }
   /// The drag's rule after a converged increment of `iterations` Newton iterations.
   void adapt_drag(SolverProgress& run, int iterations, bool creeping) const;
   double m_k0;
@@ -187,6 +190,8 @@ class TestDriver : public RelaxDriver {
  protected:
   bool settle(SolverProgress& run, double lambda_end) const override;
   bool floors(double step_dl) const override { return step_dl == 0.0; }
+  /// A level's settling drag is the one its loading ended with, kept while the level settles.
+  bool releases_creep() const override { return false; }
 };
 
 }  // namespace fibra

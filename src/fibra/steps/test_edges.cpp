@@ -4,7 +4,27 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "fibra/model/fabric.hpp"
+
 namespace fibra {
+
+std::optional<TestEdges> find_test_edges(const Case& c, const Model& model) {
+  TestEdges edges;
+  for (int e = 0; e < 4; ++e) {
+    edges.body[e] = model.body_index(kEdgeBodies[e]);
+    if (edges.body[e] < 0) return std::nullopt;
+    edges.first_dof[e] = model.bodies[edges.body[e]].first_dof;
+  }
+  for (int e : {0, 1})
+    for (const BindingSpec& b : c.bindings) {
+      if (b.body != kEdgeBodies[e]) continue;
+      for (const std::string& child : b.bodies) {
+        const int cb = model.body_index(child);
+        if (cb >= 0) edges.bound[e].push_back(model.bodies[cb].first_dof);
+      }
+    }
+  return edges;
+}
 
 void test_edge_conditions(const StepSpec& st, const TestEdges& edges, const VecX& force_end,
                           std::map<Index, std::pair<double, double>>& disp) {

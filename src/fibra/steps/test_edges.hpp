@@ -3,16 +3,20 @@
 /// fabric's edge bodies from where they are at the step's start.
 #include <array>
 #include <map>
+#include <optional>
 #include <utility>
 #include <vector>
 
 #include "fibra/core/types.hpp"
 #include "fibra/model/case.hpp"
+#include "fibra/model/model.hpp"
 
 namespace fibra {
 
 /// A test's edge bodies at the step's start, as its conditions need them.
 struct TestEdges {
+  /// Each edge body's index in the model, in kEdgeBodies' order (x-, x+, y-, y+).
+  std::array<int, 4> body{};
   /// Each edge body's first dof (3 displacements, then 3 rotations), in kEdgeBodies' order
   /// (x-, x+, y-, y+).
   std::array<Index, 4> first_dof{};
@@ -21,6 +25,11 @@ struct TestEdges {
   double lx = 0;  ///< distance along x between the x- and x+ edges' centres [m]
   double ly = 0;  ///< distance along y between the y- and y+ edges' centres [m]
 };
+
+/// The edge bodies of `model` (model/fabric.hpp, kEdgeBodies) and the bodies `c`'s bindings
+/// bind to x- and x+, their distances left at 0 (they are measured at a step's start); nullopt
+/// for a model without the four edge bodies.
+std::optional<TestEdges> find_test_edges(const Case& c, const Model& model);
 
 /// Sets test step `st`'s conditions on its edges in `disp` (dof -> its displacement or rotation
 /// at the step's start and end), which holds every edge component where it is on entry:

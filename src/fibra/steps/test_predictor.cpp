@@ -13,16 +13,15 @@
 
 namespace fibra {
 
-void predict_test_level(const Model& model, const BodySystem* bodies, const StepSpec& st,
+void predict_test_level(const Model& model, const BodySystem* bodies, const TestEdges* edges, const StepSpec& st,
                         const std::map<Index, std::pair<double, double>>& disp, const std::vector<char>& fixed,
                         const VecX& before, VecX& q) {
+  if (!edges) return;
   // Each edge body's motion to lambda (zero along its free components) and its centre now.
   Vec3 centre[4], motion[4];
-  Index first_dof[4];
+  const std::array<Index, 4>& first_dof = edges->first_dof;
   for (int e = 0; e < 4; ++e) {
-    const int b = model.body_index(kEdgeBodies[e]);
-    if (b < 0) return;
-    const Index d0 = first_dof[e] = model.bodies[b].first_dof;
+    const Index d0 = first_dof[e];
     centre[e] = before.segment<3>(d0);
     motion[e] = q.segment<3>(d0) - before.segment<3>(d0);
   }

@@ -7,6 +7,7 @@
 #include "fibra/core/types.hpp"
 #include "fibra/model/case.hpp"
 #include "fibra/model/model.hpp"
+#include "fibra/steps/test_edges.hpp"
 
 namespace fibra {
 
@@ -17,8 +18,9 @@ class BodySystem;
 /// them), interpolated between opposite edges, the section vectors turned with their fiber's
 /// tangent; the bodies follow their members. A starting point for the level's Newton solve, not
 /// a result. `disp`: the step's prescribed dofs (start and end values), for a shear with its
-/// height free. Does nothing on a model without the four edge bodies.
-void predict_test_level(const Model& model, const BodySystem* bodies, const StepSpec& st,
+/// height free; `edges`: the model's edge bodies (find_test_edges), null for a model without
+/// them, where the predictor does nothing.
+void predict_test_level(const Model& model, const BodySystem* bodies, const TestEdges* edges, const StepSpec& st,
                         const std::map<Index, std::pair<double, double>>& disp, const std::vector<char>& fixed,
                         const VecX& before, VecX& q);
 
