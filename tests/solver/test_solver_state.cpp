@@ -46,7 +46,10 @@ std::string read_bytes(const fs::path& path) {
 class StateCounts : public ::testing::Test {
  protected:
   void SetUp() override {
-    m_dir = fs::path(FIBRA_BINARY_DIR) / "test_solver_state";
+    // A directory per test: ctest runs the tests of this fixture side by side (-j), and a shared
+    // state.bin was read by one while another rewrote it.
+    m_dir = fs::path(FIBRA_BINARY_DIR) / "test_solver_state" /
+            ::testing::UnitTest::GetInstance()->current_test_info()->name();
     fs::create_directories(m_dir);
     write_state_file((m_dir / "state.bin").string(), small_state());
     m_bytes = read_bytes(m_dir / "state.bin");
