@@ -582,5 +582,39 @@ TEST(EnergyTerms, BindingStateIsSavedRestoredAndCommitted) {
     EXPECT_TRUE(bodies.committed_rotation(b).isZero(0.0));
 }
 
+TEST(EnergyTerms, BindingUpdatesItsLaggedStateWhenUnsettled) {
+  const Case c = parse_case_toml(kBodies, "bodies.toml");
+  const Model model = build_model(c);
+  BodySystem bodies(c, model);
+  Problem p(model, &bodies);
+  VecX q = model.reference;
+  p.begin_lagged(q);
+  EXPECT_EQ(bodies.anchor_drift(q), 0.0);
+  // Fiber a's last node (bound to tow1) moved across: its binding violated, its anchor drifted.
+  const Index node = model.fibers[0].first_node + model.fibers[0].num_nodes - 1;
+  q[9 * node + 1] += 1e-3;
+  const double violation = bodies.violation(q), drift = bodies.anchor_drift(q);
+  ASSERT_GT(violation, 1e-6);
+  ASSERT_GT(drift, 1e-6);
+  const std::vector<double> lambda = bodies.multipliers();
+  // Within the tolerance: settled, nothing changes.
+  EXPECT_TRUE(p.update_lagged(q, {2.0 * std::max(violation, drift), 0.0}));
+  EXPECT_EQ(bodies.multipliers(), lambda);
+  EXPECT_EQ(bodies.anchor_drift(q), drift);
+  // Drifted, the violation within the tolerance, but the anchors' springs pull with less than a
+  // thousandth of the force left: settled.
+  const double pull = bodies.proximal_stiffness() * drift;
+  EXPECT_TRUE(p.update_lagged(q, {violation, 1001.0 * pull}));
+  // ... and with more: the anchors follow, the multipliers stay.
+  EXPECT_FALSE(p.update_lagged(q, {violation, 999.0 * pull}));
+  EXPECT_EQ(bodies.multipliers(), lambda);
+  EXPECT_EQ(bodies.anchor_drift(q), 0.0);
+  // Violated: the multipliers are updated (and the anchors follow).
+  q[9 * node + 1] += 1e-3;
+  EXPECT_FALSE(p.update_lagged(q, {0.5 * bodies.violation(q), 0.0}));
+  EXPECT_NE(bodies.multipliers(), lambda);
+  EXPECT_EQ(bodies.anchor_drift(q), 0.0);
+}
+
 }  // namespace
 }  // namespace fibra

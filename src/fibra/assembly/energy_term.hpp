@@ -24,6 +24,12 @@ class LaggedState {
   virtual ~LaggedState() = default;
 };
 
+/// What a term's lagged state is settled against after a minimization (EnergyTerm::update_lagged).
+struct LaggedTolerance {
+  double length = 0;  ///< a condition's violation, a lagged anchor's drift [m]
+  double force = 0;   ///< the force the minimization leaves unresolved (its tolerance times the reference force) [N]
+};
+
 /// An energy term on the model's dofs (9 per node, then 6 per rigid body).
 class EnergyTerm {
  public:
@@ -52,6 +58,16 @@ class EnergyTerm {
     return {};
   }
 
+  /// Starts an increment's minimizations at q (a lagged anchor takes q).
+  virtual void begin_lagged(const VecX& q) { (void)q; }
+  /// After a minimization converged at q: updates the lagged quantities the term finds
+  /// unsettled against `tolerance` (multipliers, anchors); true when all were settled and
+  /// nothing changed, false when the minimization must be run again.
+  virtual bool update_lagged(const VecX& q, const LaggedTolerance& tolerance) {
+    (void)q;
+    (void)tolerance;
+    return true;
+  }
   /// The term's lagged state, to be put back by restore(); null for a term without one.
   virtual std::unique_ptr<LaggedState> save() const { return nullptr; }
   /// Puts back a state that save() returned; true when the term's stencils changed with it (the

@@ -44,6 +44,16 @@ bool Problem::set_contacts(std::vector<ContactElement> contacts, const FrictionP
   return changed;
 }
 
+void Problem::begin_lagged(const VecX& q) {
+  for (EnergyTerm* t : m_terms) t->begin_lagged(q);
+}
+
+bool Problem::update_lagged(const VecX& q, const LaggedTolerance& tolerance) {
+  bool settled = true;
+  for (EnergyTerm* t : m_terms) settled = t->update_lagged(q, tolerance) && settled;
+  return settled;
+}
+
 LaggedStates Problem::save_lagged() const {
   LaggedStates s;
   for (const EnergyTerm* t : m_terms) s.terms.push_back(t->save());

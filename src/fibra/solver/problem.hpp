@@ -65,6 +65,11 @@ class Problem {
   /// Bounds a Newton step: no dof d moves more than `max_move` / `length_scale`[d] (ContactTerm).
   void set_step_limit(double max_move, VecX length_scale) { m_contact.set_step_limit(max_move, std::move(length_scale)); }
 
+  /// Starts an increment's minimizations at q: every term's begin_lagged.
+  void begin_lagged(const VecX& q);
+  /// After a minimization converged at q, every term updates its unsettled lagged quantities
+  /// (EnergyTerm::update_lagged); true when every term was settled.
+  bool update_lagged(const VecX& q, const LaggedTolerance& tolerance);
   /// Every term's lagged state (EnergyTerm::save).
   LaggedStates save_lagged() const;
   /// Puts back what save_lagged() returned; true when the sparsity pattern changed with it (the

@@ -497,38 +497,18 @@ double StaticSolver::drag_residual(DragPart part) const {
 bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, double& residual) {
   iterations = 0;
   const double tolerance = m_case.solver.binding_tolerance * m_model.length_scale * m_tolerance_scale;
-  if (m_bodies) m_bodies->set_anchors(m_q);
+  // The lagged quantities updated between minimizations within an increment (the bindings'
+  // multipliers and anchors, BindingTerm::update_lagged); the contact's are updated around
+  // this loop, by solve_increment.
+  m_problem->begin_lagged(m_q);
   for (int update = 0;; ++update) {
     int its = 0;
     const bool ok = newton(history, its, residual);
     iterations += its;
     if (!ok) return false;
-    bool settled = true;
-    if (m_bodies) {
-      // Augmented Lagrangian: conditions within the tolerance; proximal anchors: see below.
-      const double violation = m_bodies->violation(m_q), drift = m_bodies->anchor_drift(m_q);
-      const bool satisfied = violation <= tolerance;
-      // Anchored: no member moved more than the tolerance since its anchor, or the anchors'
-      // springs (mu = 1e-10 k_ref) pull with less than a thousandth of the force the Newton
-      // solve leaves (its tolerance times the reference force): either way they bias nothing.
-      // With the drift alone, a settling increment of the 480-fiber twill's shear, the fabric
-      // still creeping under the drag, restarted Newton after every solve (drift 1e-6 to 3e-5 m
-      // against 1e-7 m; violation 6e-10 m) and failed after 30 updates, ~350 s; 12 of level 1's
-      // 19 updates were drift alone (docs/performance.md, "Bindings: the anchors' drift").
-      const double pull = m_bodies->proximal_stiffness() * drift;
-      const bool anchored = drift <= tolerance || pull <= 1e-3 * m_newton_tolerance * m_reference_force;
-      if (debug_newton() && !(satisfied && anchored))
-        fmt::print(stderr, " bindings: violation {:.3e} m, anchors' drift {:.3e} m, tolerance {:.3e} m: update {}\n",
-                   violation, drift, tolerance, update + 1);
-      if (!satisfied) m_bodies->update_multipliers(m_q);
-      if (!anchored || !satisfied) {
-        m_bodies->set_anchors(m_q);
-        settled = false;
-        ++m_binding_updates;
-        ++m_stats.binding_updates;
-      }
-    }
-    if (settled) return true;
+    if (m_problem->update_lagged(m_q, {tolerance, m_newton_tolerance * m_reference_force})) return true;
+    ++m_binding_updates;
+    ++m_stats.binding_updates;
     if (update >= m_case.solver.max_binding_updates) return false;
   }
 }

@@ -20,6 +20,12 @@ class BindingTerm final : public EnergyTerm {
   Index num_local() const override { return m_bodies.num_bindings(); }
   std::span<const Index> local_groups(Index k) const override { return m_bodies.stencils().stencil(k); }
   Eigen::MatrixXd local_hessian(Index k, const VecX& q) const override { return m_bodies.local_hessian(k, q); }
+  /// The proximal anchors of the bound fiber nodes take q.
+  void begin_lagged(const VecX& q) override { m_bodies.set_anchors(q); }
+  /// Augmented Lagrangian: the multipliers are updated when a condition is violated by more than
+  /// the length tolerance, and the anchors follow the solution when they drifted by more than it
+  /// and their springs pull with more than a thousandth of the force left unresolved.
+  bool update_lagged(const VecX& q, const LaggedTolerance& tolerance) override;
   /// The bodies' committed frames and rotations and the bindings' multipliers (a snapshot).
   std::unique_ptr<LaggedState> save() const override {
     auto s = std::make_unique<State>();
