@@ -988,27 +988,24 @@ void StaticSolver::record_factor_source(double shift) {
 
 void StaticSolver::refactorize(const FactorSource& f) {
   // The problem as it is, put back after.
-  const std::vector<double> bodies = m_bodies ? m_bodies->snapshot() : std::vector<double>{};
-  const std::vector<ContactElement> contacts = m_problem->contacts();
-  const FrictionParams friction = m_problem->friction();
+  const LaggedStates lagged = m_problem->save_lagged();
   const double drag = m_problem->drag(), director = m_problem->drag_director_weight(),
                axial = m_problem->drag_axial_weight();
   const VecX anchor = m_problem->drag_anchor();
   const std::vector<NodalMoment> moments = m_problem->moments();
   const std::vector<char> fixed = m_problem->fixed();
-  auto set = [this](const std::vector<double>& b, const std::vector<ContactElement>& c, const FrictionParams& fr,
-                    double d, const VecX& a, double dw, double aw, const std::vector<NodalMoment>& m,
-                    const std::vector<char>& x) {
-    if (m_bodies) m_bodies->restore(b);
-    if (m_contact && m_problem->set_contacts(c, fr)) m_linear->analyze(m_problem->pattern());
-    m_problem->set_drag(d, a, dw, aw);
-    m_problem->moments() = m;
-    m_problem->fixed() = x;
-  };
-  set(f.bodies, f.contacts, f.friction, f.drag, f.drag_anchor, f.director_weight, f.axial_weight, f.moments, f.fixed);
+  // The problem as the factorization saw it (a checkpoint's record of it).
+  if (m_bodies) m_bodies->restore(f.bodies);
+  if (m_contact && m_problem->set_contacts(f.contacts, f.friction)) m_linear->analyze(m_problem->pattern());
+  m_problem->set_drag(f.drag, f.drag_anchor, f.director_weight, f.axial_weight);
+  m_problem->moments() = f.moments;
+  m_problem->fixed() = f.fixed;
   m_problem->evaluate(f.q, nullptr, &m_hessian);
   const bool ok = m_linear->factorize(m_hessian, f.shift) == FactorStatus::Ok;
-  set(bodies, contacts, friction, drag, anchor, director, axial, moments, fixed);
+  if (m_problem->restore_lagged(lagged)) m_linear->analyze(m_problem->pattern());
+  m_problem->set_drag(drag, anchor, director, axial);
+  m_problem->moments() = moments;
+  m_problem->fixed() = fixed;
   m_factor_source = f;
   // It factorized before; should it not now, the next solve factorizes afresh.
   if (!ok) {
