@@ -375,13 +375,20 @@ ends = [{ fiber = "d", node = "first" }, { fiber = "d", node = "last" }]
 name = "s"
 )";
 
+// The model of kBodies and its bodies.
+struct BoundFibers {
+  Case c = parse_case_toml(kBodies, "bodies.toml");
+  Model model = build_model(c);
+  BodySystem bodies{c, model};
+};
+
 TEST(EnergyTerms, Bindings) {
   std::mt19937 rng(7);
   std::normal_distribution<double> normal(0.0, 1.0);
   for (int trial = 0; trial < 3; ++trial) {
-    const Case c = parse_case_toml(kBodies, "bodies.toml");
-    const Model model = build_model(c);
-    BodySystem bodies(c, model);
+    BoundFibers fx;
+    const Model& model = fx.model;
+    BodySystem& bodies = fx.bodies;
     BindingTerm term(bodies);
     VecX q = model.reference;
     if (trial > 0) {
@@ -411,9 +418,9 @@ VecX dragged_state(const Model& model, const VecX& anchor, std::mt19937& rng) {
 }
 
 TEST(EnergyTerms, Drag) {
-  const Case c = parse_case_toml(kBodies, "bodies.toml");
-  const Model model = build_model(c);
-  BodySystem bodies(c, model);
+  BoundFibers fx;
+  const Model& model = fx.model;
+  BodySystem& bodies = fx.bodies;
   DragTerm term(model, &bodies);
   std::mt19937 rng(2);
   const VecX anchor = random_state(model, rng, 1.0);
@@ -433,9 +440,9 @@ TEST(EnergyTerms, Drag) {
 // squares add up); with the positions released the drag pulls on the section vectors only, as
 // it did with them held.
 TEST(EnergyTerms, DragForceByParts) {
-  const Case c = parse_case_toml(kBodies, "bodies.toml");
-  const Model model = build_model(c);
-  BodySystem bodies(c, model);
+  BoundFibers fx;
+  const Model& model = fx.model;
+  BodySystem& bodies = fx.bodies;
   DragTerm term(model, &bodies);
   std::mt19937 rng(5);
   const VecX anchor = random_state(model, rng, 1.0);
@@ -468,9 +475,9 @@ TEST(EnergyTerms, DragForceByParts) {
 
 // The problem sums exactly its terms.
 TEST(EnergyTerms, ProblemIsTheSumOfItsTerms) {
-  const Case c = parse_case_toml(kBodies, "bodies.toml");
-  const Model model = build_model(c);
-  BodySystem bodies(c, model);
+  BoundFibers fx;
+  const Model& model = fx.model;
+  BodySystem& bodies = fx.bodies;
   Problem p(model, &bodies);
   std::vector<std::string> names;
   for (const EnergyTerm* t : p.terms()) names.push_back(t->name());
@@ -551,9 +558,9 @@ TEST(EnergyTerms, ContactBoundsTheNewtonStep) {
 }
 
 TEST(EnergyTerms, BindingStateIsSavedRestoredAndCommitted) {
-  const Case c = parse_case_toml(kBodies, "bodies.toml");
-  const Model model = build_model(c);
-  BodySystem bodies(c, model);
+  BoundFibers fx;
+  const Model& model = fx.model;
+  BodySystem& bodies = fx.bodies;
   Problem p(model, &bodies);
   std::mt19937 rng(13);
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -583,9 +590,9 @@ TEST(EnergyTerms, BindingStateIsSavedRestoredAndCommitted) {
 }
 
 TEST(EnergyTerms, BindingUpdatesItsLaggedStateWhenUnsettled) {
-  const Case c = parse_case_toml(kBodies, "bodies.toml");
-  const Model model = build_model(c);
-  BodySystem bodies(c, model);
+  BoundFibers fx;
+  const Model& model = fx.model;
+  BodySystem& bodies = fx.bodies;
   Problem p(model, &bodies);
   VecX q = model.reference;
   p.begin_lagged(q);

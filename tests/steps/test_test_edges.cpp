@@ -102,69 +102,30 @@ TEST(TestEdges, AShearWithItsHeightFreeNeedsAForceAcross) {
 // The edge bodies found in a model by their names, with the bodies bound to x- and x+ in the
 // order of the bindings; none without all four.
 TEST(TestEdges, TheEdgeBodiesAreFoundWithTheBodiesBoundToThem) {
-  std::string text = R"(
-[[material]]
-name = "m"
-young = 1e9
-poisson = 0.3
-[[fiber]]
-name = "a"
-material = "m"
-radius = 0.01
-elements = 1
-points = [[0, 0, 0], [1, 0, 0]]
-[[fiber]]
-name = "b"
-material = "m"
-radius = 0.01
-elements = 1
-points = [[0, 0.1, 0], [1, 0.1, 0]]
-[[body]]
-name = "end.a0"
-center = [0, 0, 0]
-[[body]]
-name = "end.b0"
-center = [0, 0.1, 0]
-[[body]]
-name = "end.a1"
-center = [1, 0, 0]
-[[binding]]
-body = "end.a0"
-ends = [{ fiber = "a", node = "first" }]
-[[binding]]
-body = "end.b0"
-ends = [{ fiber = "b", node = "first" }]
-[[binding]]
-body = "end.a1"
-ends = [{ fiber = "a", node = "last" }]
-[[body]]
-name = "edge.y-"
-center = [0.5, -0.1, 0]
-[[body]]
-name = "edge.x+"
-center = [1, 0.05, 0]
-[[body]]
-name = "edge.x-"
-center = [0, 0.05, 0]
+  // Two fibers, their ends' bodies, the edges x-, x+ and y- and, with `all`, y+; x- and x+
+  // bind the ends' bodies.
+  auto text = [](bool all) {
+    return std::string(R"(
+material = [{ name = "m", young = 1e9, poisson = 0.3 }]
+fiber = [{ name = "a", material = "m", radius = 0.01, elements = 1, points = [[0, 0, 0], [1, 0, 0]] },
+         { name = "b", material = "m", radius = 0.01, elements = 1, points = [[0, 0.1, 0], [1, 0.1, 0]] }]
+body = [{ name = "end.a0", center = [0, 0, 0] }, { name = "end.b0", center = [0, 0.1, 0] },
+        { name = "end.a1", center = [1, 0, 0] }, { name = "edge.y-", center = [0.5, -0.1, 0] },
+        { name = "edge.x+", center = [1, 0.05, 0] }, { name = "edge.x-", center = [0, 0.05, 0] })") +
+           (all ? ", { name = \"edge.y+\", center = [0.5, 0.2, 0] }]" : "]") + R"(
+binding = [{ body = "end.a0", ends = [{ fiber = "a", node = "first" }] },
+           { body = "end.b0", ends = [{ fiber = "b", node = "first" }] },
+           { body = "end.a1", ends = [{ fiber = "a", node = "last" }] },
+           { body = "edge.x-", bodies = ["end.b0", "end.a0"] },
+           { body = "edge.x+", bodies = ["end.a1"] }]
+step = [{ name = "s" }]
 )";
-  const std::string edge_yplus = R"(
-[[body]]
-name = "edge.y+"
-center = [0.5, 0.2, 0]
-[[binding]]
-body = "edge.x-"
-bodies = ["end.b0", "end.a0"]
-[[binding]]
-body = "edge.x+"
-bodies = ["end.a1"]
-[[step]]
-name = "s"
-)";
+  };
   {
-    const Case c = parse_case_toml(text + "[[step]]\nname = \"s\"\n", "three_edges.toml");
+    const Case c = parse_case_toml(text(false), "three_edges.toml");
     EXPECT_FALSE(find_test_edges(c, build_model(c)).has_value());
   }
-  const Case c = parse_case_toml(text + edge_yplus, "edges.toml");
+  const Case c = parse_case_toml(text(true), "edges.toml");
   const Model model = build_model(c);
   const std::optional<TestEdges> edges = find_test_edges(c, model);
   ASSERT_TRUE(edges.has_value());

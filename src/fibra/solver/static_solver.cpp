@@ -870,8 +870,8 @@ void StaticSolver::test_conditions(int step, std::map<Index, std::pair<double, d
 void StaticSolver::predict_test_level(int step, double lambda) {
   const VecX before = m_q;  // once per load level
   apply(step, lambda);
-  fibra::predict_test_level(m_model, m_bodies.get(), m_edges ? &*m_edges : nullptr, m_case.steps[step], m_program->disp, m_problem->fixed(), before,
-                            m_q);
+  fibra::predict_test_level(m_model, m_bodies.get(), m_edges ? &*m_edges : nullptr, m_case.steps[step],
+                            m_program->disp, m_problem->fixed(), before, m_q);
 }
 
 SolverState StaticSolver::save_state(const std::string& step, int steps_done) const {
