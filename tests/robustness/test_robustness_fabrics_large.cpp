@@ -1,6 +1,6 @@
 // Robustness corpus, the fabric cases over ~15 s (ctest label robustness_large): larger
-// repeats (twill 2/2 and 3/1, satin 5 on 4 x 4 and 5 x 5 samples) and the matrix weave, checked
-// as the small ones are (robustness/fabric_support.hpp, test_robustness_fabrics.cpp).
+// repeats (twill 2/2 and 3/1 on 4 x 4 samples, satin 5 and 8 on 5 x 5 and 8 x 8) and the
+// matrix weave, checked as the small ones are (robustness/fabric_support.hpp, test_robustness_fabrics.cpp).
 #include <gtest/gtest.h>
 
 #include "robustness/fabric_support.hpp"
@@ -16,6 +16,7 @@ INSTANTIATE_TEST_SUITE_P(Robustness, FabricBiaxialLarge,
                          ::testing::Values(BiaxialCase{"fabric_twill22_biaxial", 2.0, false, 60},
                                            BiaxialCase{"fabric_twill31_biaxial", 1.0, false, 60},
                                            BiaxialCase{"fabric_satin5_biaxial", 1.0, false, 60},
+                                           BiaxialCase{"fabric_satin8_biaxial", 1.0, false, 300},
                                            BiaxialCase{"fabric_matrix_biaxial", 0.5, false, 60}),
                          [](const auto& p) { return std::string(p.param.name); });
 

@@ -292,8 +292,8 @@ TEST_F(Continue, ATestGoesOnWithTheDragThatLoadedItsLastLevel) {
 // loading had failed), then halved once per failure of the new level's loading; the last level may
 // take a remainder of less than a quarter of its size along (and be halved if it then fails).
 // The pseudo-time solves go to pseudo_tolerance (test_inexact = 0). Each level is loaded at the
-// stiffest drag (the weave's, which loads the first level); the sizes go 0.5, 0.25, 0.125,
-// 0.0625, 0.01562, 0.01562, 0.02344, 0.007812 (the same on one and two threads): grown once,
+// stiffest drag (the weave's, which loads the first level); the sizes go 0.5, 0.125, 0.125,
+// 0.1875, 0.01562, 0.01562, 0.02344, 0.007812 (under ctest, one BLAS thread): grown twice,
 // every ratio allowed. With 5, 7, 8 or 10 iterations every level's loading fails at the size of
 // the last one and is halved down to a remainder: no level loads at its first attempt, and
 // nothing grows, so those do not test the rule.
