@@ -34,8 +34,10 @@ inline bool warp_above(const std::vector<std::vector<int>>& matrix, int i, int j
 
 /// Centres of `count` circles of radius `r` packed without overlap in the ellipse of axes
 /// `width` x `thickness` (centred at 0): the largest hexagonal lattice spacing (>= 2r) that
-/// holds them, the `count` lattice sites nearest the centre (elliptic distance). Returns an
-/// empty vector when they do not fit even touching.
+/// holds them, the `count` lattice sites nearest the centre (elliptic distance), as symmetric
+/// as the count allows: an even count maps onto itself by the half-turn p -> -p, an odd count
+/// by the half-turn or the mirror x -> -x (docs/theory/fabric.md). Returns an empty vector when
+/// they do not fit even touching.
 std::vector<Eigen::Vector2d> pack_ellipse(int count, double r, double width, double thickness);
 
 /// Length of every generated fiber of the warp (`warp` true) or the weft: from the first to the
