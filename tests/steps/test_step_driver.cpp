@@ -23,6 +23,7 @@ class RecordingHost : public StepHost {
   double drag_force_residual() const override { return drag_residual; }
   void release_positions(double lambda, int& iterations) override {
     released.push_back(lambda);
+    if (progress != nullptr) released_settling.push_back(progress->relax_settling);
     iterations += release_iterations;
   }
   double penetration_over_cap() const override { return depth; }
@@ -34,6 +35,9 @@ class RecordingHost : public StepHost {
   std::vector<double> predicted, released;
   double drag_residual = 0, depth = 0, last_test_drag = 0;
   int release_iterations = 0;
+  /// The run whose flags a release records (the solver reads them during the release).
+  const SolverProgress* progress = nullptr;
+  std::vector<bool> released_settling;  ///< whether each release was solved as a settling increment
 };
 
 constexpr double kK0 = 1000.0;  // the contact's initial stiffness the drags are multiples of
@@ -276,14 +280,20 @@ TEST(StepDrivers, ATestRepeatsEachLevelUntilItSettles) {
   EXPECT_GT(run.failed_floor, 0.0);
   run.failed_floor = 0.0;
   // Settled: released, a point of the curves; the next level grows by half if this one was
-  // loaded at the first attempt.
+  // loaded at the first attempt. The release is solved as a settling increment (its normals
+  // and cones iterated until the residual with them is within the tolerance), and the next
+  // level's loading increment is a lagged one again.
   host.drag_residual = 5e-5;
+  host.progress = &run;
   run.normals_settled = true;
   run.dl = 0.125;
   d.converged(run, host, solved(0.0, 6));
   EXPECT_TRUE(run.level_settled);
   EXPECT_FALSE(run.relaxed);
-  EXPECT_EQ(host.released.size(), 1u);
+  ASSERT_EQ(host.released.size(), 1u);
+  ASSERT_EQ(host.released_settling.size(), 1u);
+  EXPECT_TRUE(host.released_settling[0]);
+  EXPECT_FALSE(run.relax_settling);
   d.grow(run, 6);
   EXPECT_DOUBLE_EQ(run.dl, 0.1875);
   run.level_failures = 1;

@@ -224,15 +224,25 @@ IncrementMode TestDriver::mode(const SolverProgress& run, double step_dl) const 
   return m;
 }
 
+// A settled level's release is solved as its settling increments are (run.relax_settling: the
+// normals and friction cones iterated until the residual with them is within the step's
+// tolerance), so the released state, the point of the curves, is an equilibrium to that
+// tolerance. Solved as a lagged increment instead (one normal update after the solve), the
+// residual with its updated normals and cones was 3e-3 to 2e-2 at half the levels of a
+// 3 x 3 x 16 plain weave sheared to 25 degrees in 20 levels (tolerance 2e-3); iterated, it is
+// within it at every level, for 499 Newton iterations in all against 526 and shear forces
+// within 0.2 %. The next level's loading increment is a lagged one again.
 int TestDriver::converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const {
   if (inc.step_dl > 0.0) host.set_test_drag(inc.drag);
-  return RelaxDriver::converged(run, host, inc);
+  const int released = RelaxDriver::converged(run, host, inc);
+  if (run.level_settled) run.relax_settling = false;
+  return released;
 }
 
 bool TestDriver::settle(SolverProgress& run, double lambda_end) const {
   run.level_settled = run.relax_residual <= m_step.tolerance && run.normals_settled;
   run.relaxed = lambda_end >= 1.0 - 1e-12 && run.level_settled;
-  run.relax_settling = run.relax_residual <= m_step.tolerance && !run.level_settled;
+  run.relax_settling = run.relax_residual <= m_step.tolerance;
   return run.level_settled;
 }
 
