@@ -17,6 +17,7 @@
 // a gripped axis breaks its condition by that motion, along the free axis not at all.
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <cmath>
 #include <random>
@@ -329,6 +330,61 @@ TEST(Bindings, GradientAndHessianMatchFiniteDifferences) {
       EXPECT_LT(rel_error(g.segment<3>(d), gfd.segment<3>(d), 1e-3), 1e-6) << b.name;
     }
   }
+}
+
+// The solver's fallback when the exact tangent is not positive definite: each binding's local
+// Hessian projected onto the positive semi-definite matrices (its negative eigenvalues set to
+// zero). At a turned state with large multipliers several are indefinite: the projection adds
+// to each exactly its negative part (the added matrix is positive semi-definite and its trace is
+// the sum of their magnitudes), and the sum of the projected ones is positive semi-definite.
+// Where every local Hessian is positive definite nothing changes.
+TEST(Bindings, ProjectedHessiansArePositiveSemiDefiniteAndExactWhereTheyWere) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Fixture fx;
+  VecX q = fx.model.reference;
+  {
+    // The reference state, no multipliers: positive definite, kept as it is.
+    std::vector<double> exact, projected;
+    fx.energy(q, nullptr, &exact);
+    fx.bodies.set_projected(true);
+    fx.energy(q, nullptr, &projected);
+    fx.bodies.set_projected(false);
+    EXPECT_EQ(fx.bodies.take_projections(), 0);
+    EXPECT_EQ(exact, projected);
+  }
+  for (Index d = 0; d < fx.model.node_dofs; ++d) q[d] += 0.05 * normal(rng);
+  for (const Body& b : fx.model.bodies)
+    for (int k = 0; k < 3; ++k) {
+      q[b.first_dof + k] += 0.05 * normal(rng);
+      q[b.first_dof + 3 + k] = 0.6 * normal(rng);
+    }
+  std::vector<double> lambda = fx.bodies.multipliers();
+  for (double& l : lambda) l = 1e6 * normal(rng);
+  fx.bodies.set_multipliers(lambda);
+  double negative = 0.0;  // sum of the local Hessians' negative eigenvalues' magnitudes
+  int indefinite = 0;
+  for (Index k = 0; k < fx.bodies.num_bindings(); ++k) {
+    const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(fx.bodies.local_hessian(k, q)).eigenvalues();
+    if (ev.minCoeff() >= -1e-10 * ev.cwiseAbs().maxCoeff()) continue;  // within round-off: kept
+    for (Index i = 0; i < ev.size(); ++i) negative += std::max(0.0, -ev[i]);
+    ++indefinite;
+  }
+  ASSERT_GE(indefinite, 2);
+  std::vector<double> exact, projected;
+  fx.energy(q, nullptr, &exact);
+  fx.bodies.set_projected(true);
+  fx.energy(q, nullptr, &projected);
+  fx.bodies.set_projected(false);
+  EXPECT_EQ(fx.bodies.take_projections(), indefinite);
+  const Eigen::MatrixXd he = dense(fx.pattern, exact), hp = dense(fx.pattern, projected);
+  const double scale = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(he).eigenvalues().cwiseAbs().maxCoeff();
+  const Eigen::MatrixXd added = hp - he;
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(added).eigenvalues().minCoeff(), -1e-12 * scale);
+  EXPECT_NEAR(added.trace(), negative, 1e-9 * scale);
+  EXPECT_GT(added.trace(), 1e-9 * scale);
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(hp).eigenvalues().minCoeff(), -1e-12 * scale);
+  EXPECT_LT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(he).eigenvalues().minCoeff(), -1e-9 * scale);
 }
 
 TEST(Bindings, ForceAndMomentAreTheWorkConjugatesOnTheBody) {

@@ -130,6 +130,7 @@ Checkpoint small_checkpoint() {
   p.force_start = VecX::Constant(18, 2.0);
   p.relax_drag = 123.0;
   p.settling_residual = 3.5e-3;
+  p.project_bindings = false;
   p.reuse_factor = true;
   p.krylov_budget = 40;
   p.stats.iterations = 99;
@@ -164,6 +165,7 @@ TEST_F(StateCounts, ACheckpointReadsBackWhole) {
   EXPECT_EQ(c.progress.force_start, written.progress.force_start);
   EXPECT_EQ(c.progress.relax_drag, 123.0);
   EXPECT_EQ(c.progress.settling_residual, 3.5e-3);
+  EXPECT_FALSE(c.progress.project_bindings);
   EXPECT_TRUE(c.progress.reuse_factor);
   EXPECT_EQ(c.progress.krylov_budget, 40);
   EXPECT_EQ(c.progress.stats.iterations, 99);
@@ -252,8 +254,8 @@ TEST_F(StateCounts, OlderVersionsAreRead) {
 }
 
 // A version-3 checkpoint (no settling residual) is read, and resumes as before the field: the
-// last settling increment's residual unknown (infinite). Made from a version-4 one by cutting
-// the field's 8 bytes (found by its value).
+// last settling increment's residual unknown (infinite). Made from a version-5 one by cutting
+// the field's 8 bytes and the projection flag after them (found by its value).
 TEST_F(StateCounts, VersionThreeCheckpointsAreRead) {
   Checkpoint written = small_checkpoint();
   written.progress.factor = FactorSource{};
@@ -264,7 +266,7 @@ TEST_F(StateCounts, VersionThreeCheckpointsAreRead) {
   const std::size_t at = v3.find(pattern);
   ASSERT_NE(at, std::string::npos);
   ASSERT_EQ(v3.find(pattern, at + 1), std::string::npos);
-  v3.erase(at, 8);
+  v3.erase(at, 9);  // the settling residual and the projection flag (version 5)
   const std::uint32_t three = 3;
   v3.replace(12, 4, reinterpret_cast<const char*>(&three), 4);
   seal_state_bytes(v3);
@@ -273,6 +275,33 @@ TEST_F(StateCounts, VersionThreeCheckpointsAreRead) {
   EXPECT_EQ(c.progress.settling_residual, std::numeric_limits<double>::infinity());
   EXPECT_EQ(c.progress.relax_drag, 123.0);
   EXPECT_EQ(c.progress.detection_memory, written.progress.detection_memory);
+  EXPECT_FALSE(c.progress.factor.valid);
+  EXPECT_EQ(c.case_text, written.case_text);
+}
+
+// A version-4 checkpoint (no projection flag) is read, and resumes with the bindings' projection
+// on, as a run starts. Made from a version-5 one by cutting the flag's byte, which follows the
+// settling residual (found by its value).
+TEST_F(StateCounts, VersionFourCheckpointsAreRead) {
+  Checkpoint written = small_checkpoint();
+  written.progress.factor = FactorSource{};
+  write_checkpoint_file((m_dir / "checkpoint.bin").string(), written);
+  std::string v4 = read_bytes(m_dir / "checkpoint.bin");
+  const double field = 3.5e-3;
+  const std::string pattern(reinterpret_cast<const char*>(&field), 8);
+  const std::size_t at = v4.find(pattern);
+  ASSERT_NE(at, std::string::npos);
+  ASSERT_EQ(v4.find(pattern, at + 1), std::string::npos);
+  ASSERT_EQ(v4[at + 8], '\0');  // the flag, false in small_checkpoint
+  v4.erase(at + 8, 1);
+  const std::uint32_t four = 4;
+  v4.replace(12, 4, reinterpret_cast<const char*>(&four), 4);
+  seal_state_bytes(v4);
+  std::ofstream(m_dir / "v4.bin", std::ios::binary | std::ios::trunc) << v4;
+  const Checkpoint c = read_checkpoint_file((m_dir / "v4.bin").string());
+  EXPECT_TRUE(c.progress.project_bindings);
+  EXPECT_EQ(c.progress.settling_residual, 3.5e-3);
+  EXPECT_EQ(c.progress.relax_drag, 123.0);
   EXPECT_FALSE(c.progress.factor.valid);
   EXPECT_EQ(c.case_text, written.case_text);
 }

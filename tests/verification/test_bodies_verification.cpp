@@ -312,11 +312,13 @@ increments = 2
   std::printf("moment-driven: %d Newton iterations, %d factorizations, %d with a shift, %d iterations on a shifted "
               "factor\n", m.stats.iterations, m.stats.factorizations, m.stats.regularized_factorizations,
               m.stats.shifted_iterations);
-  // Its tangents are indefinite for many iterations in a row: the search for each shift starts
-  // at a hundredth of the last one (from 1e-14 of the mean diagonal it took 78 shifted
-  // factorizations for 16 shifted iterations).
-  EXPECT_GT(m.stats.shifted_iterations, 5);
-  EXPECT_LE(m.stats.regularized_factorizations, 3 * m.stats.shifted_iterations);
+  // Its tangents are indefinite for many iterations in a row, through the bindings' second
+  // derivatives (a turned body pulled by its members): Newton factorizes them with those local
+  // Hessians projected, and needs no shift (with shifts alone, searched from a hundredth of the
+  // last one, it took 61 factorizations, 33 of them shifted, for the same 42 iterations).
+  EXPECT_EQ(m.stats.shifted_iterations, 0);
+  EXPECT_EQ(m.stats.regularized_factorizations, 0);
+  EXPECT_LT(m.stats.factorizations, m.stats.iterations);
   std::printf("group: member pushed by %.4g r, the others by %.4g r in total; head moment %.4g N m\n", moved / r,
               others / r, b1.moment.x());
 }

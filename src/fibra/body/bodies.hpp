@@ -31,6 +31,7 @@
 /// the spin angle times r, a length like the grip's conditions; tilting the section or
 /// stretching it leaves s unchanged to first order). Same augmented Lagrangian.
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "fibra/model/case.hpp"
@@ -68,6 +69,15 @@ class BodySystem {
 
   /// Energy of all bindings at q; adds the gradient and Hessian (sequential, fixed order).
   double evaluate(const VecX& q, const AssemblyTarget& target, bool want_gradient, bool want_hessian);
+  /// Whether evaluate() adds each binding's local Hessian projected onto the positive
+  /// semi-definite matrices where it is not (its negative eigenvalues set to zero). Off by
+  /// default: the exact Hessian, which the derivative checks compare with finite differences.
+  /// The solver projects when the exact tangent is not positive definite (docs/theory/solver.md,
+  /// "Indefinite tangents").
+  void set_projected(bool on) { m_projected = on; }
+  /// Local Hessians evaluate() found indefinite and projected since the last call (the count
+  /// is reset).
+  Index take_projections() { return std::exchange(m_projections, 0); }
   /// The six conditions of binding k at q, in the body frame (position then rotation) [m].
   Vec6 conditions(Index k, const VecX& q) const;
   /// Largest |g| over all conditions of all bindings [m].
@@ -186,6 +196,8 @@ class BodySystem {
   std::vector<Binding> m_bindings;
   StencilSet m_stencils;
   double m_mu = 0;          // proximal stiffness
+  bool m_projected = false;  // evaluate() projects indefinite local Hessians (set_projected)
+  Index m_projections = 0;   // local Hessians projected since take_projections()
   VecX m_g;                 // local buffers (sized to the largest binding)
   Eigen::MatrixXd m_h;
 };

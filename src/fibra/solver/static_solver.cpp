@@ -739,6 +739,30 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       // (docs/performance.md, "Shifted factorizations").
       FactorStatus st = m_linear->factorize(m_hessian, shift);
       ++m_stats.factorizations;
+      if (st == FactorStatus::Ok) m_run.project_bindings = true;
+      // Not positive definite: first the bindings' local Hessians projected where they are
+      // indefinite (a turned body pulled by its members, (lambda + k g) . d2g), then, if that
+      // is not enough, the shift. A moment-driven twist of a bound body
+      // (BindingGroup.TwistedByItsBodyThenOneMemberPushedAside) takes 39 factorizations, none
+      // shifted, against 61 with shifts alone (33 shifted) for the same 42 iterations. Only
+      // then: projected at every iteration, its tangent lost the (negative) curvature the
+      // members' beams balance, and the twist took 2,324 iterations and ended 1.2e-5 rad off its angle.
+      bool projected = false;
+      if (st == FactorStatus::NotPositiveDefinite && m_bodies && m_run.project_bindings) {
+        m_bodies->set_projected(true);
+        m_problem->evaluate(m_q, nullptr, &m_hessian);
+        m_bodies->set_projected(false);
+        projected = m_bodies->take_projections() > 0;
+        if (projected) {
+          st = m_linear->factorize(m_hessian, shift);
+          ++m_stats.factorizations;
+          // Not enough (a free spin, a buckling fiber): the next refused tangents go straight
+          // to the shift until an exact one passes again. On the 2 x 2 fabrics of the corpus
+          // the projected tangent was refused as well, a factorization in vain per shifted
+          // iteration.
+          if (st != FactorStatus::Ok) m_run.project_bindings = false;
+        }
+      }
       while (st == FactorStatus::NotPositiveDefinite && shift < mean_diag) {
         shift = shift == 0.0 ? std::max(1e-14, 1e-2 * m_last_shift) * mean_diag : shift * 100.0;
         st = m_linear->factorize(m_hessian, shift);
@@ -754,7 +778,9 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       m_fresh_cg = -1;
       m_krylov_budget = krylov_budget(opt.method.krylov_iterations, m_linear->factor_flops(),
                                       m_linear->factor_nonzeros());
-      if (debug_newton()) fmt::print(stderr, "  it {:2d} factorized ({:.2f} s)\n", iterations, seconds_since(t0));
+      if (debug_newton())
+        fmt::print(stderr, "  it {:2d} factorized ({:.2f} s){}\n", iterations, seconds_since(t0),
+                   projected ? ", the bindings' indefinite Hessians projected" : "");
       m_stats.factor_nonzeros = m_linear->factor_nonzeros();
       if (st != FactorStatus::Ok) return false;
       if (shift > 0.0 && debug_newton() && !spectra_printed) {
@@ -762,7 +788,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
         print_indefinite_tangent(shift, mean_diag);
       }
       // Only the factor of a (nearly) unshifted tangent preconditions later iterations.
-      m_reuse_factor = shift <= 1e-10 * mean_diag;
+      m_reuse_factor = shift <= 1e-10 * mean_diag && !projected;
       if (m_reuse_factor) record_factor_source(shift);
       else m_factor_source.valid = false;
       damped = !m_reuse_factor;
