@@ -288,6 +288,21 @@ TEST(Bindings, SpinHoldMeasuresTheTurnAboutTheFiberAxisOnly) {
   EXPECT_NEAR(moment, k * r * r * std::sin(psi) * std::cos(psi), 1e-6 * std::abs(moment));
 }
 
+// A random state near q: every node and body centre moved by about 0.05, every body turned
+// by about 0.6 rad, and multipliers of about 1e6 (the bindings' Hessians then indefinite).
+void perturb(Fixture& fx, VecX& q, std::mt19937& rng) {
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (Index d = 0; d < fx.model.node_dofs; ++d) q[d] += 0.05 * normal(rng);
+  for (const Body& b : fx.model.bodies)
+    for (int k = 0; k < 3; ++k) {
+      q[b.first_dof + k] += 0.05 * normal(rng);
+      q[b.first_dof + 3 + k] = 0.6 * normal(rng);
+    }
+  std::vector<double> lambda = fx.bodies.multipliers();
+  for (double& l : lambda) l = 1e6 * normal(rng);
+  fx.bodies.set_multipliers(lambda);
+}
+
 TEST(Bindings, GradientAndHessianMatchFiniteDifferences) {
   std::mt19937 rng(7);
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -298,15 +313,7 @@ TEST(Bindings, GradientAndHessianMatchFiniteDifferences) {
     for (const Body& b : fx.model.bodies)
       for (int k = 0; k < 3; ++k) q[b.first_dof + 3 + k] = 0.5 * normal(rng);
     fx.bodies.commit(q);
-    for (Index d = 0; d < fx.model.node_dofs; ++d) q[d] += 0.05 * normal(rng);
-    for (const Body& b : fx.model.bodies)
-      for (int k = 0; k < 3; ++k) {
-        q[b.first_dof + k] += 0.05 * normal(rng);
-        q[b.first_dof + 3 + k] = 0.6 * normal(rng);
-      }
-    std::vector<double> lambda = fx.bodies.multipliers();
-    for (double& l : lambda) l = 1e6 * normal(rng);
-    fx.bodies.set_multipliers(lambda);
+    perturb(fx, q, rng);
 
     VecX g;
     std::vector<double> hv;
@@ -340,7 +347,6 @@ TEST(Bindings, GradientAndHessianMatchFiniteDifferences) {
 // Where every local Hessian is positive definite nothing changes.
 TEST(Bindings, ProjectedHessiansArePositiveSemiDefiniteAndExactWhereTheyWere) {
   std::mt19937 rng(11);
-  std::normal_distribution<double> normal(0.0, 1.0);
   Fixture fx;
   VecX q = fx.model.reference;
   {
@@ -353,15 +359,7 @@ TEST(Bindings, ProjectedHessiansArePositiveSemiDefiniteAndExactWhereTheyWere) {
     EXPECT_EQ(fx.bodies.take_projections(), 0);
     EXPECT_EQ(exact, projected);
   }
-  for (Index d = 0; d < fx.model.node_dofs; ++d) q[d] += 0.05 * normal(rng);
-  for (const Body& b : fx.model.bodies)
-    for (int k = 0; k < 3; ++k) {
-      q[b.first_dof + k] += 0.05 * normal(rng);
-      q[b.first_dof + 3 + k] = 0.6 * normal(rng);
-    }
-  std::vector<double> lambda = fx.bodies.multipliers();
-  for (double& l : lambda) l = 1e6 * normal(rng);
-  fx.bodies.set_multipliers(lambda);
+  perturb(fx, q, rng);
   double negative = 0.0;  // sum of the local Hessians' negative eigenvalues' magnitudes
   int indefinite = 0;
   for (Index k = 0; k < fx.bodies.num_bindings(); ++k) {
