@@ -745,8 +745,9 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       // is not enough, the shift. A moment-driven twist of a bound body
       // (BindingGroup.TwistedByItsBodyThenOneMemberPushedAside) takes 39 factorizations, none
       // shifted, against 61 with shifts alone (33 shifted) for the same 42 iterations. Only
-      // then: projected at every iteration, its tangent lost the (negative) curvature the
-      // members' beams balance, and the twist took 2,324 iterations and ended 1.2e-5 rad off its angle.
+      // when the exact tangent is refused: projected at every iteration, the twist's tangent
+      // lost the negative curvature its members' beams balance, and it took 2,324 iterations
+      // and ended 1.2e-5 rad off its angle.
       bool projected = false;
       if (st == FactorStatus::NotPositiveDefinite && m_bodies && m_run.project_bindings) {
         m_bodies->set_projected(true);
