@@ -80,6 +80,15 @@ class EnergyTerm {
   /// force, a body's committed rotation). A term whose dofs hold increments of its history
   /// rewrites them in q (a body's rotation dofs start the next increment at zero).
   virtual void commit(VecX& q) { (void)q; }
+  /// Whether assemble() adds the term's local Hessians projected onto the positive semi-definite
+  /// matrices where they are indefinite (the exact ones otherwise, as the derivative checks
+  /// compare them); false for a term that has no projection.
+  virtual bool set_projected(bool on) {
+    (void)on;
+    return false;
+  }
+  /// Local Hessians assemble() projected since the last call (the count is reset).
+  virtual Index take_projections() { return 0; }
   /// The largest fraction in (0, 1] of the Newton correction dq from q that the term allows
   /// (1: no bound).
   virtual double step_bound(const VecX& q, const VecX& dq) const {

@@ -80,6 +80,19 @@ double Problem::step_bound(const VecX& q, const VecX& dq) const {
   return bound;
 }
 
+Index Problem::projected_hessian(const VecX& q, std::vector<double>& hessian) {
+  bool any = false;
+  for (EnergyTerm* t : m_terms) any = t->set_projected(true) || any;
+  if (!any) return 0;
+  evaluate(q, nullptr, &hessian);
+  Index projected = 0;
+  for (EnergyTerm* t : m_terms) {
+    t->set_projected(false);
+    projected += t->take_projections();
+  }
+  return projected;
+}
+
 double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hessian) {
   const auto t0 = std::chrono::steady_clock::now();
   if (gradient) gradient->setZero(q.size());

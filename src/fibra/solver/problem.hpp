@@ -109,6 +109,10 @@ class Problem {
   /// Total potential energy at q; fills the gradient of Pi on every dof (f_int - f_ext) and
   /// the Hessian values (free-free block; eliminated dofs get a unit-scaled diagonal).
   double evaluate(const VecX& q, VecX* gradient, std::vector<double>* hessian);
+  /// Assembles the Hessian at q into `hessian` with the local Hessians of the terms that have a
+  /// projection (EnergyTerm::set_projected) projected where they are indefinite; returns how
+  /// many were, 0 (and `hessian` left as it is) when no term has a projection.
+  Index projected_hessian(const VecX& q, std::vector<double>& hessian);
 
  private:
   void build_pattern();

@@ -749,11 +749,8 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       // lost the negative curvature its members' beams balance, and it took 2,324 iterations
       // and ended 1.2e-5 rad off its angle.
       bool projected = false;
-      if (st == FactorStatus::NotPositiveDefinite && m_bodies && m_run.project_bindings) {
-        m_bodies->set_projected(true);
-        m_problem->evaluate(m_q, nullptr, &m_hessian);
-        m_bodies->set_projected(false);
-        projected = m_bodies->take_projections() > 0;
+      if (st == FactorStatus::NotPositiveDefinite && m_run.project_bindings) {
+        projected = m_problem->projected_hessian(m_q, m_hessian) > 0;
         if (projected) {
           st = m_linear->factorize(m_hessian, shift);
           ++m_stats.factorizations;

@@ -36,6 +36,12 @@ class BindingTerm final : public EnergyTerm {
     m_bodies.restore(dynamic_cast<const State&>(state).values);
     return false;
   }
+  /// The bindings' indefinite local Hessians projected (BodySystem::set_projected).
+  bool set_projected(bool on) override {
+    m_bodies.set_projected(on);
+    return true;
+  }
+  Index take_projections() override { return m_bodies.take_projections(); }
   /// The bodies' rotations are committed; their rotation dofs start the next increment at zero.
   void commit(VecX& q) override { m_bodies.commit(q); }
 
