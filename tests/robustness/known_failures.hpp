@@ -65,11 +65,6 @@ inline constexpr KnownFailure kKnownFailures[] = {
      "woven, relaxed (edge forces balanced to 2e-9) and pulled with every level an equilibrium, but the warp's "
      "stiffness falls at level 2, 4749 N then 4743 N (-0.1 %): the glass warps and carbon wefts, pulled by the same "
      "strain, straighten at different rates, and the crimp one loses the other gains (crimp interchange)"},
-    {"fabric_tight_biaxial",
-     "the weave, the relax, the crossings and the equilibrium of every level pass; the curves' stiffness falls at the "
-     "last level, warp 3271 N against 3274 N, weft 3272 N against 3273 N (-0.1 %), where the tight sample's curves "
-     "are straight (its fibers stretch, the crimp gone): friction's path, not the solver's tolerance (every level is "
-     "an equilibrium to the Newton tolerance), decides the sign of that difference"},
     {"fabric_plain_shear_mirror",
      "the relaxed plain weave carries a shear force, 0.34 % of the largest edge force (x-force of the held edge.y+), "
      "and the curves at +5 and -5 degrees differ by 10 % of the largest shear force: the generator packs each tow's "

@@ -62,7 +62,7 @@ struct SolverStats {
   int regularized_factorizations = 0;  ///< factorizations attempted with a shift
   int shifted_iterations = 0;     ///< Newton iterations solved with a shifted factor
   int line_search_trials = 0;
-  int searched_solves = 0;        ///< Newton solves in which the line search turned on
+  int searched_solves = 0;        ///< Newton solves in which the line search shortened a step
   int roundoff_convergences = 0;  ///< increments accepted at the round-off floor of the residual
   int binding_updates = 0;        ///< augmented-Lagrangian multiplier updates
   int limited_steps = 0;          ///< Newton steps scaled down to the step limit
