@@ -823,7 +823,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     // Rises are counted within this solve only: a binding update or new normals between two
     // solves of an increment raise the residual by design.
     const size_t k = history.size();
-    const bool stalled =
+    const bool search_step =
         (searching && history[k - 1] > 1e3 * opt.residual_tolerance) || (k >= first + 4 && history[k - 1] > history[k - 2]) ||
         (k >= first + 7 && history[k - 1] > 1e3 * m_newton_tolerance &&
          history[k - 1] > 0.9 * std::min({history[k - 2], history[k - 3], history[k - 4]}));
@@ -840,7 +840,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       ++m_stats.limited_steps;
     }
     trial = m_q + dq;
-    if (opt.method.line_search && stalled && s0 < 0.0) {
+    if (opt.method.line_search && search_step && s0 < 0.0) {
       const double e0 = m_problem->evaluate(m_q, nullptr, nullptr);
       const double noise = 1e-11 * std::abs(e0) + 1e-14 * std::abs(s0);
       double e1 = m_problem->evaluate(trial, nullptr, nullptr);
