@@ -828,6 +828,9 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
         (k >= first + 7 && history[k - 1] > 1e3 * m_newton_tolerance &&
          history[k - 1] > 0.9 * std::min({history[k - 2], history[k - 3], history[k - 4]}));
     m_problem->set_energy_base(m_q);
+    // The slope of the full Newton step, before the limit below: the sufficient decrease asked
+    // of a limited step is that of the full step's slope (docs/performance.md, "Alternatives
+    // measured and not used").
     const double s0 = dq.dot(r);
     double alpha = 1.0;
     // With contact, no node moves more than a fraction of the smallest radius per iteration:
