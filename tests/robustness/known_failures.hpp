@@ -48,7 +48,7 @@ inline constexpr KnownFailure kKnownFailures[] = {
      "weak along the fibers the beam slid 5.2 mm along itself off a support at load factor 0.75; held along them "
      "too, the deflection is within 0.1 % of beam theory but the reactions balance only to that tolerance (1.6e-4 "
      "at 1e-4), and at 1e-6 or 1e-7 of the load the settling increments do not converge (90 cuts at load factor "
-     "0.5; the failed attempts' tangent indefinite in the beam's spin under the pusher, v.Hv = -1.6e-6 against a mean "
+     "0.5; the failed attempts' tangent singular in the beam's spin under the pusher, v.Hv = -1.6e-6 against a mean "
      "diagonal of 7.3e8; normals along the common perpendicular of the centre lines fail the same way)"},
     {"crossed_radius_ratio_20",
      "converges, but the two fibers' reactions balance to 6.7e-6 of the thin fiber's 15 uN load (1.0e-10 N), below "
