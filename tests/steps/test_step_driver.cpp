@@ -29,11 +29,12 @@ class RecordingHost : public StepHost {
   double penetration_over_cap() const override { return depth; }
   double test_drag() const override { return last_test_drag; }
   void set_test_drag(double drag) override { last_test_drag = drag; }
+  double normal_feedback() const override { return feedback; }
 
   VecX moved;
   double move_scale = 0;
   std::vector<double> predicted, released;
-  double drag_residual = 0, depth = 0, last_test_drag = 0;
+  double drag_residual = 0, depth = 0, last_test_drag = 0, feedback = 0;
   int release_iterations = 0;
   /// The run whose flags a release records (the solver reads them during the release).
   const SolverProgress* progress = nullptr;
@@ -86,7 +87,7 @@ TEST(StepDrivers, EachKindOfStepGetsItsDriver) {
 TEST(StepDrivers, ALoadStepPredictsFromTheLastIncrementsMotion) {
   const SolverSpec opt;
   const StepSpec st = step(StepSpec::Kind::Standard);
-  const LoadDriver d(st, opt);
+  const LoadDriver d(st, opt, false, 0.0);
   SolverProgress run = fresh(d, 4);
   EXPECT_TRUE(run.relaxed);  // ends at full load
   const IncrementMode mode = d.mode(run, 0.25);  // no drag, no weave, no test
@@ -118,6 +119,65 @@ TEST(StepDrivers, ALoadStepPredictsFromTheLastIncrementsMotion) {
   // The last increment takes what is left.
   run.lambda = 0.9;
   EXPECT_NEAR(d.load_step(run, host), 0.1, 1e-15);
+}
+
+// A load step with contact is held from its first failure on: the same increment again with
+// the stiffest drag, then each level repeated until the drag's force is below the held
+// tolerance of the load at an increment that iterated its normals; the drag stays above the
+// normals' feedback and is never released.
+TEST(StepDrivers, ALoadStepWithContactIsHeldFromItsFirstFailure) {
+  const SolverSpec opt;
+  const StepSpec st = step(StepSpec::Kind::Standard);
+  const LoadDriver d(st, opt, true, kK0);
+  SolverProgress run = fresh(d, 4);
+  RecordingHost host;
+  EXPECT_DOUBLE_EQ(d.load_step(run, host), 0.25);
+  EXPECT_EQ(d.mode(run, 0.25).drag, 0.0);  // not held before a failure
+  EXPECT_TRUE(d.failed(run, 0.25));        // held: the same increment again, not cut
+  EXPECT_DOUBLE_EQ(run.relax_drag, opt.method.relax_drag * kK0);
+  EXPECT_DOUBLE_EQ(d.load_step(run, host), 0.25);
+  IncrementMode mode = d.mode(run, 0.25);
+  EXPECT_TRUE(mode.proximal && mode.held && mode.loading);
+  EXPECT_FALSE(mode.test || mode.weave);
+  EXPECT_DOUBLE_EQ(mode.drag, kK0);
+  const VecX start = VecX::Zero(3), end = VecX::Constant(3, 1.0);
+  SolvedIncrement inc = solved(0.25, 6);
+  inc.start = &start;
+  inc.state = &end;
+  host.drag_residual = 1e-2;
+  host.feedback = 100.0;
+  run.normals_settled = true;
+  EXPECT_EQ(d.converged(run, host, inc), 0);
+  run.lambda += 0.25;
+  EXPECT_FALSE(run.level_settled || run.relax_settling);
+  EXPECT_DOUBLE_EQ(run.relax_drag, kK0 / 4);
+  EXPECT_DOUBLE_EQ(d.load_step(run, host), 0.0);  // the level repeats
+  mode = d.mode(run, 0.0);
+  EXPECT_TRUE(mode.held && !mode.loading);
+  // Below the step's tolerance: the next increments iterate their normals.
+  host.drag_residual = 0.5 * st.tolerance;
+  host.feedback = 400.0;  // the contact's force grew: the drag follows it
+  d.converged(run, host, solved(0.0, 3));
+  EXPECT_TRUE(run.relax_settling);
+  EXPECT_FALSE(run.level_settled);
+  EXPECT_DOUBLE_EQ(run.relax_drag, 400.0);  // kept while settling, raised to the normals' feedback
+  // Within the held tolerance, but its normals not settled, then settled.
+  host.drag_residual = 0.5 * opt.method.held_tolerance;
+  run.normals_settled = false;
+  d.converged(run, host, solved(0.0, 2));
+  EXPECT_FALSE(run.level_settled);
+  run.normals_settled = true;
+  d.converged(run, host, solved(0.0, 2));
+  EXPECT_TRUE(run.level_settled);
+  EXPECT_FALSE(run.relaxed);          // not at full load
+  EXPECT_FALSE(run.relax_settling);   // the next level's loading is lagged
+  EXPECT_TRUE(host.released.empty());  // nothing to release
+  EXPECT_DOUBLE_EQ(d.load_step(run, host), 0.25);
+  // Without contact, a failure is cut.
+  const LoadDriver alone(st, opt, false, 0.0);
+  SolverProgress bare = fresh(alone, 4);
+  EXPECT_FALSE(alone.failed(bare, 0.25));
+  EXPECT_EQ(bare.relax_drag, 0.0);
 }
 
 TEST(StepDrivers, AWeaveEndsOnceItsTowsAreApartAndStopsAtTwiceItsIncrements) {

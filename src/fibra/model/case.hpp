@@ -225,6 +225,9 @@ struct SolverMethod {
   double test_inexact = 0.01;             ///< tests: Newton tolerance of pseudo-time increments / the drag force they leave, of settling ones / the step's tolerance (0: off)
   double test_penetration_slack = 0.05;   ///< tests: a settled level's deepest penetration may exceed the cap by this fraction
   bool test_predictor = true;             ///< tests: each load level starts from the interior moved like the edges (interpolated)
+  /// Held load steps (LoadDriver): a level is settled once the drag's force and the residual
+  /// with updated normals are below this fraction of the load (applied forces and reactions).
+  double held_tolerance = 1e-5;
   double pseudo_tolerance = 1e-6;         ///< Newton tolerance of pseudo-time increments (weave; relax/test while the drag force is above its tolerance)
   /// CG iterations preconditioned by the last factorization before a new one: < 0 = the
   /// factorization's price in CG iterations, from its flops (automatic); 0 = factorize every

@@ -194,8 +194,11 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   // Weaving: along a fiber the drag is weaker (method.drag_axial, 0.01), so the fibers slide along
   // themselves as the tows crimp and the edges draw in, instead of stretching against a drag
   // that holds every node (docs/theory/fabric.md, "Drag along the fibers").
+  // A held load step's drag is as stiff along the fibers as across them: its fibers are held
+  // where they are, not let slide (LoadDriver).
   m_problem->set_drag(m_mode.drag, m_drag_anchor, weave || relax ? kDirectorDrag : 1.0,
-                      weave || relax ? m_case.solver.method.drag_axial : 1.0, positions_released ? 0.0 : 1.0);
+                      weave || (relax && !m_mode.held) ? m_case.solver.method.drag_axial : 1.0,
+                      positions_released ? 0.0 : 1.0);
 
   // METHOD §4: (1) contact elements, repeated while the set changes; (2) normals, repeated
   // while they turn; (3) Newton on the rest. A zone that penetrates too deep gets a stiffer
@@ -319,7 +322,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
         const double moved = normal_update_residual();
         if (debug_newton()) fmt::print(stderr, " residual with the new normals and cones {:.3e}\n", moved);
         m_settling_moved = moved;
-        m_run.normals_settled = moved <= m_case.steps[step].tolerance;
+        m_run.normals_settled = moved <= (m_mode.held ? m_case.solver.method.held_tolerance : m_case.steps[step].tolerance);
         stalled = moved > 0.5 * last_moved;
         last_moved = moved;
       }
@@ -487,11 +490,11 @@ double StaticSolver::normal_update_residual() {
       const double f = m_force_scale[d] * m_update_gradient[d];
       res += f * f;
     }
-  return std::sqrt(res) / std::max(m_reference_force, 1e-300);
+  return std::sqrt(res) / std::max(settling_reference(), 1e-300);
 }
 
 double StaticSolver::drag_residual(DragPart part) const {
-  return m_problem->drag_force_norm(m_q, m_force_scale, part) / std::max(m_reference_force, 1e-300);
+  return m_problem->drag_force_norm(m_q, m_force_scale, part) / std::max(settling_reference(), 1e-300);
 }
 
 bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, double& residual) {
@@ -656,6 +659,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     }
     const double fref = std::max({std::sqrt(ext), std::sqrt(react), force_floor});
     m_reference_force = fref;
+    m_load_force = std::max({std::sqrt(ext), std::sqrt(react), 1e-3 * force_floor});
     if (debug_newton()) {
       Index wr = 0;
       for (Index d = 0; d < n; ++d)
@@ -1147,6 +1151,18 @@ class StaticSolver::DriverHost final : public StepHost {
   }
   double test_drag() const override { return m_s.m_test_drag; }
   void set_test_drag(double drag) override { m_s.m_test_drag = drag; }
+  double normal_feedback() const override {
+    if (!m_s.m_contact) return 0.0;
+    const std::vector<ContactElement>& elements = m_s.m_problem->contacts();
+    const std::vector<ContactResponse>& responses = m_s.m_problem->contact_solution();
+    double largest = 0.0;
+    for (size_t e = 0; e < elements.size() && e < responses.size(); ++e) {
+      const Particle &a = elements[e].a, &b = elements[e].b;
+      const double distance = std::hypot(a.xi1, a.xi2) + std::hypot(b.xi1, b.xi2);
+      if (distance > 0.0) largest = std::max(largest, responses[e].normal_force / distance);
+    }
+    return largest;
+  }
 
  private:
   StaticSolver& m_s;
@@ -1321,6 +1337,10 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       solved.start = &saved;
       solved.state = &m_q;
       iterations += driver->converged(m_run, host, solved);
+      if (debug_newton() && m_mode.proximal)
+        fmt::print(stderr, " drag {:.3e} N/m per node, its force {:.3e} of the {}, normals {}settled; next drag {:.3e} N/m\n",
+                   solved.drag, m_run.relax_residual, m_mode.held ? "load" : "reference force",
+                   m_run.normals_settled ? "" : "not ", m_run.relax_drag);
       lambda += step_dl;
       if (1.0 - lambda < 1e-12) lambda = 1.0;
       ++done;

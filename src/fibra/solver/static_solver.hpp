@@ -110,6 +110,9 @@ class StaticSolver {
   class DriverHost;  // what a step driver asks of the solver (steps/step_driver.hpp)
   /// The drag's force on `part` at the current state, relative to the reference force.
   double drag_residual(DragPart part) const;
+  /// What the drag's force and the residual with updated normals are measured against: the
+  /// load in a held load step, the reference force otherwise.
+  double settling_reference() const { return m_mode.held ? m_load_force : m_reference_force; }
   /// Biaxial and shear steps: the edge bodies' conditions from their positions at the step's
   /// start (prescribed start and end values of the body dofs, into `disp`).
   void test_conditions(int step, std::map<Index, std::pair<double, double>>& disp) const;
@@ -200,6 +203,9 @@ class StaticSolver {
   PcgWorkspace m_pcg;             // conjugate gradients' work vectors
   double m_settling_moved = -1;   // the increment's last residual with updated normals and cones (-1: not measured)
   double m_reference_force = 0;  // reference force of the last Newton iteration [N]
+  // The load of the last Newton iteration: applied forces and reactions, floored at 1e-3 of
+  // the reference force's floor only [N] (what a held load step measures against).
+  double m_load_force = 0;
   double m_newton_tolerance = 0;  // residual tolerance of the current Newton solves (relative; >= residual_tolerance)
   double m_tolerance_scale = 1;   // the current Newton tolerance over the step's own (pseudo_ or residual_tolerance)
   IncrementMode m_mode;          // how the increment being solved is solved (its step's driver)

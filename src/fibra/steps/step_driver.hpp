@@ -41,6 +41,11 @@ class StepHost {
   /// Tests: the drag that applied the last load level, of this run or the run it starts from.
   virtual double test_drag() const = 0;
   virtual void set_test_drag(double drag) = 0;
+  /// What a contact element's normal, lagged while its particles slide apart, pushes back per
+  /// unit of slide at the increment's state: the largest normal force over the distance between
+  /// the two section centres, F_n / (r_a + r_b) over the contact elements [N/m] (0 without
+  /// contact).
+  virtual double normal_feedback() const = 0;
 };
 
 /// How an increment of the step is solved (StaticSolver::solve_increment), as its driver sets it.
@@ -59,6 +64,11 @@ struct IncrementMode {
   /// (method.test_inexact); its first increment moves the edges (`loading`).
   bool test = false;
   bool loading = false;
+  /// A load step held by its drag after a failure (LoadDriver): the drag is as stiff along the
+  /// fibers as across them, and its force and the residual with updated normals and cones are
+  /// measured against the load (applied forces and reactions) instead of the floored reference
+  /// force.
+  bool held = false;
 };
 
 /// An increment that converged, as its step's driver sees it.
@@ -123,14 +133,6 @@ class StepDriver {
   double m_nominal;  ///< the step's own load step (1 / increments)
 };
 
-/// Load steps (and any step without a drag): each increment predicted from the last one's
-/// motion; ends at full load.
-class LoadDriver : public StepDriver {
- public:
-  LoadDriver(const StepSpec& st, const SolverSpec& opt) : StepDriver(st, opt) {}
-  void predict(const SolverProgress& run, StepHost& host, double step_dl) const override;
-  int converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const override;
-};
 
 /// Weave steps: with contact, they go on at full load until the crossing tows are within the
 /// penetration cap, at most twice the step's increments.
@@ -170,6 +172,8 @@ class RelaxDriver : public StepDriver {
   /// Whether a settling increment whose residual with updated normals and cones does not halve
   /// lets the drag fall (the relax's creep rule, RelaxDriver::converged).
   virtual bool releases_creep() const { return true; }
+  /// The drag's force, relative to the reference force, below which a level is settled.
+  virtual double tolerance() const { return m_step.tolerance; }
   /// The drag's rule after a converged increment of `iterations` Newton iterations.
   void adapt_drag(SolverProgress& run, int iterations, bool creeping) const;
   double m_k0;
@@ -192,6 +196,34 @@ class TestDriver : public RelaxDriver {
   bool floors(double step_dl) const override { return step_dl == 0.0; }
   /// A level's settling drag is the one its loading ended with, kept while the level settles.
   bool releases_creep() const override { return false; }
+};
+
+/// Load steps (and any step without a drag): each increment predicted from the last one's
+/// motion; ends at full load. With contact, a load step whose increment fails is held from then
+/// on: each load level is applied with a drag towards the increment's start and repeated at the
+/// same load factor, as a test level is, until the drag's force and the residual with updated
+/// normals are below method.held_tolerance of the load (docs/theory/solver.md, "Held load
+/// steps").
+class LoadDriver : public TestDriver {
+ public:
+  LoadDriver(const StepSpec& st, const SolverSpec& opt, bool contact, double k0)
+      : TestDriver(st, opt, k0), m_contact(contact && opt.method.relax_drag > 0.0) {}
+  void begin(SolverProgress& run) const override { run.relaxed = true; }
+  double load_step(SolverProgress& run, StepHost& host) const override;
+  void predict(const SolverProgress& run, StepHost& host, double step_dl) const override;
+  IncrementMode mode(const SolverProgress& run, double step_dl) const override;
+  bool failed(SolverProgress& run, double step_dl) const override;
+  int converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const override;
+  void grow(SolverProgress& run, int iterations) const override;
+
+ protected:
+  bool settle(SolverProgress& run, double lambda_end) const override;
+  double tolerance() const override { return m_solver.method.held_tolerance; }
+
+ private:
+  /// Held: the step's increment failed once (the drag is on from then on).
+  static bool held(const SolverProgress& run) { return run.relax_drag > 0.0; }
+  bool m_contact;  ///< the model has contact (and the drag is on): the step can be held
 };
 
 }  // namespace fibra
