@@ -140,6 +140,7 @@ TEST(StepDrivers, ALoadStepWithContactIsHeldFromItsFirstFailure) {
   EXPECT_TRUE(mode.proximal && mode.held && mode.loading);
   EXPECT_FALSE(mode.test || mode.weave);
   EXPECT_DOUBLE_EQ(mode.drag, kK0);
+  EXPECT_DOUBLE_EQ(mode.tolerance, opt.method.held_tolerance);  // what the solver settles its normals to
   const VecX start = VecX::Zero(3), end = VecX::Constant(3, 1.0);
   SolvedIncrement inc = solved(0.25, 6);
   inc.start = &start;

@@ -288,7 +288,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     m_tolerance_scale = 1.0;
     const bool test_with_drag = m_mode.test && m_mode.drag > 0.0;
     if (test_with_drag) {
-      const double expected = !lagged ? m_case.steps[step].tolerance : m_mode.loading ? m_run.load_residual : m_run.relax_residual;
+      const double expected = !lagged ? m_mode.tolerance : m_mode.loading ? m_run.load_residual : m_run.relax_residual;
       const double loose = m_case.solver.method.test_inexact * expected;
       if (loose > m_newton_tolerance) {
         m_tolerance_scale = loose / m_newton_tolerance;
@@ -322,7 +322,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
         const double moved = normal_update_residual();
         if (debug_newton()) fmt::print(stderr, " residual with the new normals and cones {:.3e}\n", moved);
         m_settling_moved = moved;
-        m_run.normals_settled = moved <= (m_mode.held ? m_case.solver.method.held_tolerance : m_case.steps[step].tolerance);
+        m_run.normals_settled = moved <= m_mode.tolerance;
         stalled = moved > 0.5 * last_moved;
         last_moved = moved;
       }

@@ -108,7 +108,7 @@ class StaticSolver {
 
  private:
   class DriverHost;  // what a step driver asks of the solver (steps/step_driver.hpp)
-  /// The drag's force on `part` at the current state, relative to the reference force.
+  /// The drag's force on `part` at the current state, relative to settling_reference().
   double drag_residual(DragPart part) const;
   /// What the drag's force and the residual with updated normals are measured against: the
   /// load in a held load step, the reference force otherwise.

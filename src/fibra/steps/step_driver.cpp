@@ -13,7 +13,7 @@ std::unique_ptr<StepDriver> StepDriver::make(const StepSpec& st, const SolverSpe
     if (st.is_test()) return std::make_unique<TestDriver>(st, opt, k0);
     return std::make_unique<RelaxDriver>(st, opt, k0);
   }
-  return std::make_unique<LoadDriver>(st, opt, contact && !st.is_proximal(), k0);
+  return std::make_unique<LoadDriver>(st, opt, contact, k0);
 }
 
 double StepDriver::load_step(SolverProgress& run, StepHost& host) const {
@@ -98,6 +98,7 @@ IncrementMode RelaxDriver::mode(const SolverProgress& run, double step_dl) const
   IncrementMode m;
   m.proximal = true;
   m.drag = run.relax_drag;
+  m.tolerance = tolerance();
   return m;
 }
 
@@ -183,10 +184,14 @@ void RelaxDriver::adapt_drag(SolverProgress& run, int iterations, bool creeping)
 // (StepHost::test_drag). It goes on from the last test step of the run, or of the run whose
 // state this one starts from (a restart from a test's checkpoint whose first level started at a
 // lower drag failed twice on the 480-fiber biaxial test before it reached that drag again).
-double TestDriver::load_step(SolverProgress& run, StepHost& host) const {
+double TestDriver::level_step(SolverProgress& run) const {
   if (run.level_settled && 1.0 - run.lambda < 1.25 * run.dl) run.dl = 1.0 - run.lambda;
   run.dl = std::min(run.dl, 1.0 - run.lambda);
-  const double step_dl = run.level_settled ? run.dl : 0.0;
+  return run.level_settled ? run.dl : 0.0;
+}
+
+double TestDriver::load_step(SolverProgress& run, StepHost& host) const {
+  const double step_dl = level_step(run);
   if (run.level_settled && step_dl > 0.0) run.relax_drag = std::max(run.relax_drag, std::min(host.test_drag(), m_drag_max));
   return step_dl;
 }
@@ -259,14 +264,13 @@ void LoadDriver::predict(const SolverProgress& run, StepHost& host, double step_
 // solve the beam slid by millimetres and every cut failed the same way. From its first failure
 // on, the step is held: each load level is applied by a proximal increment, a drag towards its
 // start as stiff along the fibers as across them (weak along them, the same beam pushed 2.5
-// times deeper had not settled its last level after 12 600 increments), and repeated at the same load factor until the drag's force and the residual with
-// updated normals are below method.held_tolerance of the load: the drag does no work at the
-// level's end. The drag adapts as a test's does, above the normals' feedback (converged).
+// times deeper had not settled its last level after 12 600 increments), and repeated at the
+// same load factor, as a test level is (TestDriver::level_step), until the drag's force and the
+// residual with updated normals are below method.held_tolerance of the load: the drag does no
+// work at the level's end. The drag adapts as a test's does, above the normals' feedback
+// (converged).
 double LoadDriver::load_step(SolverProgress& run, StepHost& host) const {
-  if (!held(run)) return StepDriver::load_step(run, host);
-  if (run.level_settled && 1.0 - run.lambda < 1.25 * run.dl) run.dl = 1.0 - run.lambda;
-  run.dl = std::min(run.dl, 1.0 - run.lambda);
-  return run.level_settled ? run.dl : 0.0;
+  return held(run) ? level_step(run) : StepDriver::load_step(run, host);
 }
 
 IncrementMode LoadDriver::mode(const SolverProgress& run, double step_dl) const {

@@ -69,6 +69,9 @@ struct IncrementMode {
   /// measured against the load (applied forces and reactions) instead of the floored reference
   /// force.
   bool held = false;
+  /// Relax, tests and held load steps: the drag's force, and the residual with updated normals
+  /// and cones, below which the increment's state is settled (RelaxDriver::tolerance).
+  double tolerance = 0;
 };
 
 /// An increment that converged, as its step's driver sees it.
@@ -172,7 +175,8 @@ class RelaxDriver : public StepDriver {
   /// Whether a settling increment whose residual with updated normals and cones does not halve
   /// lets the drag fall (the relax's creep rule, RelaxDriver::converged).
   virtual bool releases_creep() const { return true; }
-  /// The drag's force, relative to the reference force, below which a level is settled.
+  /// The drag's force below which a level is settled, relative to what the solver measures it
+  /// against (the reference force; the load in a held load step).
   virtual double tolerance() const { return m_step.tolerance; }
   /// The drag's rule after a converged increment of `iterations` Newton iterations.
   void adapt_drag(SolverProgress& run, int iterations, bool creeping) const;
@@ -194,6 +198,8 @@ class TestDriver : public RelaxDriver {
  protected:
   bool settle(SolverProgress& run, double lambda_end) const override;
   bool floors(double step_dl) const override { return step_dl == 0.0; }
+  /// The size of the next increment (`run.dl`) and its load step: 0 while the level settles.
+  double level_step(SolverProgress& run) const;
   /// A level's settling drag is the one its loading ended with, kept while the level settles.
   bool releases_creep() const override { return false; }
 };
