@@ -3,7 +3,8 @@
 // benchmark per case and one for the whole corpus, so that the regression check
 // (scripts/bench.sh) catches a solver change that makes the user's cases slower.
 //
-//   BM_Corpus/<case>        one case: wall time; counters newton (iterations), increments, converged
+//   BM_Corpus/<case>        one case: wall time; counters newton (iterations), increments, converged,
+//                           factorizations, shifted (iterations solved with a shifted factor)
 //   BM_RobustnessCorpus     every case in turn: the corpus's total wall time
 //
 // Cases that fail today (known failures) are timed too: the time to fail is what a user waits.
@@ -38,6 +39,8 @@ struct Outcome {
   bool converged = false;
   int iterations = 0;
   int increments = 0;
+  int factorizations = 0;
+  int shifted = 0;  // Newton iterations solved with a shifted factor
 };
 
 Outcome solve(const std::filesystem::path& file) {
@@ -45,7 +48,9 @@ Outcome solve(const std::filesystem::path& file) {
   ResolvedCase resolved = resolve_case(c);
   StaticSolver solver(c, resolved.model, std::move(resolved.bodies));
   const RunResult r = solver.run([](const IncrementInfo&, const VecX&) {});
-  return {r.status == RunResult::Status::Converged, solver.stats().iterations, solver.stats().increments};
+  const SolverStats& st = solver.stats();
+  return {r.status == RunResult::Status::Converged, st.iterations, st.increments, st.factorizations,
+          st.shifted_iterations};
 }
 
 void BM_Corpus(benchmark::State& state, const std::filesystem::path& file) {
@@ -54,6 +59,8 @@ void BM_Corpus(benchmark::State& state, const std::filesystem::path& file) {
   state.counters["newton"] = o.iterations;
   state.counters["increments"] = o.increments;
   state.counters["converged"] = o.converged ? 1 : 0;
+  state.counters["factorizations"] = o.factorizations;
+  state.counters["shifted"] = o.shifted;
 }
 
 void BM_RobustnessCorpus(benchmark::State& state) {

@@ -21,6 +21,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "fibra/assembly/psd_projection.hpp"
 #include "fibra/body/bodies.hpp"
 #include "fibra/io/case_reader.hpp"
 #include "fibra/model/model.hpp"
@@ -471,6 +472,93 @@ TEST(EnergyTerms, DragForceByParts) {
   EXPECT_NEAR(term.force_norm(q, scale, DragPart::Sections), sections, 1e-12 * sections);
   EXPECT_NEAR(term.force_norm(q, scale), sections, 1e-12 * sections);
   EXPECT_EQ(term.position_weight(), 0.0);
+}
+
+// The projection of a local Hessian (assembly/psd_projection.hpp): negative eigenvalues set to
+// zero, eigenvectors kept, written through an expression (a block of a larger matrix); positive
+// semi-definite matrices, singular ones included, left exactly as they are.
+TEST(EnergyTerms, ProjectionOntoPositiveSemiDefiniteMatrices) {
+  std::mt19937 rng(8);
+  const Mat3 rot = Eigen::AngleAxisd(0.7, random_unit(rng)).toRotationMatrix();
+  Eigen::Matrix<double, 5, 5> m = Eigen::Matrix<double, 5, 5>::Constant(7.0);
+  const Mat3 indefinite = rot * Vec3(4.0, -1.0, 0.5).asDiagonal() * rot.transpose();
+  m.block<3, 3>(1, 1) = indefinite;
+  EXPECT_TRUE(project_psd(m.block<3, 3>(1, 1)));
+  const Mat3 expected = rot * Vec3(4.0, 0.0, 0.5).asDiagonal() * rot.transpose();
+  EXPECT_LT((m.block<3, 3>(1, 1) - expected).norm(), 1e-14 * expected.norm());
+  EXPECT_EQ(m(0, 0), 7.0);
+  EXPECT_EQ(m(4, 1), 7.0);
+  // Singular along a rigid motion, and negative within round-off: kept bit for bit.
+  Mat3 singular = rot * Vec3(4.0, 0.0, -1e-12).asDiagonal() * rot.transpose();
+  const Mat3 before = singular;
+  EXPECT_FALSE(project_psd(singular));
+  EXPECT_EQ(singular, before);
+  Eigen::MatrixXd zero = Eigen::MatrixXd::Zero(4, 4);
+  EXPECT_FALSE(project_psd(zero));
+}
+
+// Projected Newton's local Hessians (EnergyTerm::set_projected): with the projection on, a
+// term assembles each local Hessian that is indefinite beyond round-off projected, and counts
+// it. The projection adds exactly the negative parts: the added matrix is positive
+// semi-definite and its trace is the sum of the negative eigenvalues' magnitudes; the projected
+// tangent is positive semi-definite. Where no local Hessian is indefinite (an unstrained fiber,
+// singular along its rigid motions) nothing changes. Beams at large-deformation states (a
+// compressed or sharply bent element) and moments on turned sections.
+void expect_projection(EnergyTerm& term, const Model& model, const VecX& q, bool indefinite_expected,
+                       const std::string& label) {
+  TermHarness h(term, model);
+  int indefinite = 0;
+  double negative = 0.0;
+  for (Index k = 0; k < term.num_local(); ++k) {
+    const Eigen::MatrixXd local = term.local_hessian(k, q);
+    const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(local).eigenvalues();
+    if (ev.minCoeff() >= -1e-10 * local.diagonal().cwiseAbs().maxCoeff()) continue;
+    ++indefinite;
+    for (Index i = 0; i < ev.size(); ++i) negative += std::max(0.0, -ev[i]);
+  }
+  EXPECT_EQ(indefinite > 0, indefinite_expected) << term.name() << ", " << label;
+  const Eigen::MatrixXd exact = h.assemble(q, false, true).hessian;
+  ASSERT_TRUE(term.set_projected(true)) << term.name();
+  const Eigen::MatrixXd projected = h.assemble(q, false, true).hessian;
+  term.set_projected(false);
+  EXPECT_EQ(term.take_projections(), indefinite) << term.name() << ", " << label;
+  EXPECT_EQ(term.take_projections(), 0);
+  // Off again: the exact Hessian.
+  EXPECT_EQ(h.assemble(q, false, true).hessian, exact) << term.name() << ", " << label;
+  const double scale = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(exact).eigenvalues().cwiseAbs().maxCoeff();
+  if (indefinite == 0) {
+    EXPECT_EQ(projected, exact) << term.name() << ", " << label;
+    return;
+  }
+  const Eigen::MatrixXd added = projected - exact;
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(added).eigenvalues().minCoeff(), -1e-12 * scale)
+      << term.name() << ", " << label;
+  EXPECT_NEAR(added.trace(), negative, 1e-9 * scale) << term.name() << ", " << label;
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(projected).eigenvalues().minCoeff(), -1e-12 * scale)
+      << term.name() << ", " << label;
+  EXPECT_LT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(exact).eigenvalues().minCoeff(), -1e-9 * scale)
+      << term.name() << ", " << label;
+}
+
+TEST(EnergyTerms, ProjectedNewtonLocalHessians) {
+  const Case c = parse_case_toml(kHelix, "helix.toml");
+  const Model model = build_model(c);
+  std::mt19937 rng(11);
+  BeamTerm beams(model);
+  expect_projection(beams, model, model.reference, false, "reference");
+  // The helix compressed along its axis to 60 % of its height with its sections turned about
+  // it: compressed, sharply bent elements.
+  for (int trial = 0; trial < 2; ++trial) {
+    VecX q = random_state(model, rng, 0.4);
+    for (Index k = 0; k < model.num_nodes(); ++k) q.segment<3>(9 * k) *= 0.6;
+    expect_projection(beams, model, q, true, "compressed " + std::to_string(trial));
+  }
+  LoadTerm loads(model);
+  EXPECT_FALSE(loads.set_projected(true)) << "no moments: nothing to project";
+  loads.set_projected(false);
+  for (Index k : {2, 4, 6}) loads.moments().push_back({k, 30.0 * random_unit(rng)});
+  expect_projection(loads, model, model.reference, true, "reference");
+  expect_projection(loads, model, random_state(model, rng, 0.4), true, "random");
 }
 
 // The problem sums exactly its terms.

@@ -130,7 +130,7 @@ Checkpoint small_checkpoint() {
   p.force_start = VecX::Constant(18, 2.0);
   p.relax_drag = 123.0;
   p.settling_residual = 3.5e-3;
-  p.project_bindings = false;
+  p.project_hessians = false;
   p.reuse_factor = true;
   p.krylov_budget = 40;
   p.stats.iterations = 99;
@@ -165,7 +165,7 @@ TEST_F(StateCounts, ACheckpointReadsBackWhole) {
   EXPECT_EQ(c.progress.force_start, written.progress.force_start);
   EXPECT_EQ(c.progress.relax_drag, 123.0);
   EXPECT_EQ(c.progress.settling_residual, 3.5e-3);
-  EXPECT_FALSE(c.progress.project_bindings);
+  EXPECT_FALSE(c.progress.project_hessians);
   EXPECT_TRUE(c.progress.reuse_factor);
   EXPECT_EQ(c.progress.krylov_budget, 40);
   EXPECT_EQ(c.progress.stats.iterations, 99);
@@ -299,7 +299,7 @@ TEST_F(StateCounts, VersionFourCheckpointsAreRead) {
   seal_state_bytes(v4);
   std::ofstream(m_dir / "v4.bin", std::ios::binary | std::ios::trunc) << v4;
   const Checkpoint c = read_checkpoint_file((m_dir / "v4.bin").string());
-  EXPECT_TRUE(c.progress.project_bindings);
+  EXPECT_TRUE(c.progress.project_hessians);
   EXPECT_EQ(c.progress.settling_residual, 3.5e-3);
   EXPECT_EQ(c.progress.relax_drag, 123.0);
   EXPECT_FALSE(c.progress.factor.valid);

@@ -9,6 +9,7 @@
 #include <functional>
 #include <stdexcept>
 
+#include "fibra/assembly/psd_projection.hpp"
 #include "fibra/body/rotation.hpp"
 #include "fibra/core/error.hpp"
 
@@ -22,27 +23,6 @@ Mat3 orthonormalized(const Mat3& d) {
   r.col(1) = (d.col(1) - d.col(1).dot(r.col(0)) * r.col(0)).normalized();
   r.col(2) = r.col(0).cross(r.col(1));
   return r;
-}
-
-/// Replaces a symmetric matrix that is not positive definite by its projection onto the positive
-/// semi-definite ones (negative eigenvalues set to zero); true when it did. A binding's local
-/// Hessian is positive definite but for the second derivatives of its conditions times their
-/// forces (`(lambda + k g) . d2g`, through the body's rotation): a turned body pulled by its
-/// members makes it indefinite, by about 1e-7 of its largest eigenvalue on the 480-fiber
-/// shear's edge bodies, and the global tangent with it.
-bool project_psd(Eigen::Ref<Eigen::MatrixXd> h) {
-  // Positive definite (the usual case, the bound nodes' proximal springs on the diagonal): kept
-  // as it is, for the price of a Cholesky factorization.
-  Eigen::LLT<Eigen::MatrixXd> llt(h);
-  if (llt.info() == Eigen::Success) return false;
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(h);
-  if (eig.info() != Eigen::Success) return false;
-  // Negative eigenvalues within round-off of the largest (a positive semi-definite matrix the
-  // Cholesky factorization refused) are left as they are.
-  if (eig.eigenvalues().minCoeff() >= -1e-10 * eig.eigenvalues().cwiseAbs().maxCoeff()) return false;
-  const Eigen::VectorXd kept = eig.eigenvalues().cwiseMax(0.0);
-  h = eig.eigenvectors() * kept.asDiagonal() * eig.eigenvectors().transpose();
-  return true;
 }
 
 }  // namespace

@@ -24,7 +24,7 @@ namespace {
 // than its length, a damaged one fails its checksum.
 constexpr char kMagic[] = "fibra state\n";
 constexpr std::uint32_t kVersion = 5;  // 2: test_drag; 3: kind, length, checksum, checkpoints; 4: settling_residual;
-                                       // 5: project_bindings
+                                       // 5: project_hessians
 constexpr char kEnd[] = "end of state\n";
 constexpr std::size_t kMagicSize = sizeof(kMagic) - 1;
 constexpr std::size_t kEndSize = sizeof(kEnd) - 1;
@@ -301,7 +301,7 @@ void put_progress(Out& o, const SolverProgress& p) {
     o.bytes(keys.data(), keys.size() * sizeof(std::uint64_t));
   }
   o.put(p.settling_residual);
-  o.put(static_cast<std::uint8_t>(p.project_bindings));
+  o.put(static_cast<std::uint8_t>(p.project_hessians));
   const FactorSource& f = p.factor;
   o.put(static_cast<std::uint8_t>(f.valid));
   if (!f.valid) return;
@@ -362,7 +362,7 @@ SolverProgress get_progress(In& in, const ModelFingerprint& model, Index nodes, 
     in.read(keys.data(), keys.size() * sizeof(std::uint64_t));
   }
   if (version >= 4) p.settling_residual = in.get<double>();
-  if (version >= 5) p.project_bindings = flag();
+  if (version >= 5) p.project_hessians = flag();
   if (p.step < 0 || p.total < 0 || p.done < 0 || p.attempts < 0 || !(p.lambda >= 0.0 && p.lambda <= 1.0) ||
       !(p.dl >= 0.0 && p.dl <= 1.0) || p.force_start.size() != model.dofs || p.iteration_factor < 1 ||
       p.iteration_factor > 4 || !(p.last_dl >= 0.0 && p.last_dl <= 1.0) ||

@@ -120,10 +120,10 @@ struct SolverProgress {
   bool normals_settled = true;   ///< the last increment's normals and friction cones were a fixed point
   bool relax_settling = false;   ///< relax and test steps: the drag's force is negligible, the normals iterated
   bool reuse_factor = false;
-  /// A tangent the factorization refuses is factorized next with the bindings' indefinite local
-  /// Hessians projected; false once such an attempt was refused too, until an exact tangent is
-  /// positive definite again.
-  bool project_bindings = true;
+  /// A tangent the factorization refuses is factorized next with the terms' indefinite local
+  /// Hessians projected (beams, moments, bindings); false once such an attempt was refused too,
+  /// until an exact tangent is positive definite again.
+  bool project_hessians = true;
   int krylov_budget = 20, cg_excess = 0, fresh_cg = -1, iteration_factor = 1;
   SolverStats stats;
   FactorSource factor;

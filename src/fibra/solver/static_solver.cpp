@@ -746,26 +746,26 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       // (docs/performance.md, "Shifted factorizations").
       FactorStatus st = m_linear->factorize(m_hessian, shift);
       ++m_stats.factorizations;
-      if (st == FactorStatus::Ok) m_run.project_bindings = true;
-      // Not positive definite: first the bindings' local Hessians projected where they are
-      // indefinite (a turned body pulled by its members, (lambda + k g) . d2g), then, if that
-      // is not enough, the shift. A moment-driven twist of a bound body
+      if (st == FactorStatus::Ok) m_run.project_hessians = true;
+      // Not positive definite: first the terms' local Hessians projected where they are
+      // indefinite (a compressed fiber's element, a moment on a turned section, a turned body
+      // pulled by its members, (lambda + k g) . d2g), then, if that is not enough, the shift. A moment-driven twist of a bound body
       // (BindingGroup.TwistedByItsBodyThenOneMemberPushedAside) takes 39 factorizations, none
       // shifted, against 61 with shifts alone (33 shifted) for the same 42 iterations. Only
       // when the exact tangent is refused: projected at every iteration, the twist's tangent
       // lost the negative curvature its members' beams balance, and it took 2,324 iterations
       // and ended 1.2e-5 rad off its angle.
       bool projected = false;
-      if (st == FactorStatus::NotPositiveDefinite && m_run.project_bindings) {
+      if (st == FactorStatus::NotPositiveDefinite && m_run.project_hessians) {
         projected = m_problem->projected_hessian(m_q, m_hessian) > 0;
         if (projected) {
           st = m_linear->factorize(m_hessian, shift);
           ++m_stats.factorizations;
-          // Not enough (a free spin, a buckling fiber): the next refused tangents go straight
+          // Not enough (a free spin, a mechanism): the next refused tangents go straight
           // to the shift until an exact one passes again. On the 2 x 2 fabrics of the corpus
           // the projected tangent was refused as well, a factorization in vain per shifted
           // iteration.
-          if (st != FactorStatus::Ok) m_run.project_bindings = false;
+          if (st != FactorStatus::Ok) m_run.project_hessians = false;
         }
       }
       while (st == FactorStatus::NotPositiveDefinite && shift < mean_diag) {
@@ -785,7 +785,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
                                       m_linear->factor_nonzeros());
       if (debug_newton())
         fmt::print(stderr, "  it {:2d} factorized ({:.2f} s){}\n", iterations, seconds_since(t0),
-                   projected ? ", the bindings' indefinite Hessians projected" : "");
+                   projected ? ", the indefinite local Hessians projected" : "");
       m_stats.factor_nonzeros = m_linear->factor_nonzeros();
       if (st != FactorStatus::Ok) return false;
       if (shift > 0.0 && debug_newton() && !spectra_printed) {

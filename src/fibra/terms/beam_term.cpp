@@ -1,5 +1,6 @@
 #include "fibra/terms/beam_term.hpp"
 
+#include "fibra/assembly/psd_projection.hpp"
 #include "fibra/beam/beam_element.hpp"
 
 namespace fibra {
@@ -18,8 +19,10 @@ double BeamTerm::assemble(const VecX& q, const AssemblyTarget& target) {
   return assemble_set<ElemVec, ElemMat>(m_stencils, target, target.gradient != nullptr, target.values != nullptr,
                                         m_energy_buffer, [&](Index s, ElemVec* g, ElemMat* h) {
                                           const BeamElement& e = model.elements[s];
-                                          return beam_element_energy(e, model.sections[e.section],
-                                                                     q.data() + e.first_dof, g, h);
+                                          const double energy = beam_element_energy(
+                                              e, model.sections[e.section], q.data() + e.first_dof, g, h);
+                                          if (h && m_projected && project_psd(*h)) ++m_projections;
+                                          return energy;
                                         });
 }
 

@@ -1,5 +1,6 @@
 #include "fibra/terms/load_term.hpp"
 
+#include "fibra/assembly/psd_projection.hpp"
 #include "fibra/solver/nodal_load.hpp"
 
 namespace fibra {
@@ -25,6 +26,7 @@ double LoadTerm::assemble(const VecX& q, const AssemblyTarget& target) {
     if (target.values) {
       Eigen::Matrix<double, 9, 9> h = Eigen::Matrix<double, 9, 9>::Zero();
       h.block<6, 6>(3, 3) = -df;
+      if (m_projected && project_psd(h.block<6, 6>(3, 3))) ++m_projections;
       const Index grp[1] = {m.node};
       scatter_local<Eigen::Matrix<double, 9, 1>, Eigen::Matrix<double, 9, 9>>(target, grp, nullptr, &h);
     }

@@ -3,6 +3,7 @@
 /// moments on nodes' section vectors, conservative about their fixed axes (nodal_load.hpp,
 /// docs/theory/beam.md). Its energy is minus the work from the reference state; a moment's
 /// work is measured from an energy base near the state (whole turns are not counted).
+#include <utility>
 #include <vector>
 
 #include "fibra/assembly/energy_term.hpp"
@@ -27,6 +28,13 @@ class LoadTerm final : public EnergyTerm {
   std::span<const Index> local_groups(Index k) const override { return {&m_moments[k].node, 1}; }
   /// The Hessian of moment k's potential on its node (9 x 9; dead forces have none).
   Eigen::MatrixXd local_hessian(Index k, const VecX& q) const override;
+  /// Each moment's Hessian projected onto the positive semi-definite matrices where it is
+  /// indefinite, for projected Newton.
+  bool set_projected(bool on) override {
+    m_projected = on;
+    return !m_moments.empty();
+  }
+  Index take_projections() override { return std::exchange(m_projections, 0); }
 
   VecX& forces() { return m_forces; }                          ///< dead forces per dof [N]
   std::vector<NodalMoment>& moments() { return m_moments; }    ///< nodal moments
@@ -39,6 +47,8 @@ class LoadTerm final : public EnergyTerm {
   VecX m_forces;
   std::vector<NodalMoment> m_moments;
   VecX m_energy_base;
+  bool m_projected = false;  // assemble() projects indefinite moment Hessians
+  Index m_projections = 0;   // moment Hessians projected since take_projections()
 };
 
 }  // namespace fibra
