@@ -94,6 +94,11 @@ int run(const std::string& path, std::string out, int threads, bool progress_lin
   // Missing plots never fail a run: one warning, the curves are there.
   if (!r.plots_error.empty()) fmt::print(stderr, "warning: no plots of the curves: {}\n", r.plots_error);
   const auto& s = r.stats;
+  if (r.unstable_increments > 0)
+    fmt::print(stderr,
+               "note: {} increment{} ended on an unstable equilibrium, the first in {}: a load step follows "
+               "its equilibrium path past a bifurcation (history.csv, stability:negative_pivots)\n",
+               r.unstable_increments, r.unstable_increments == 1 ? "" : "s", r.first_unstable);
   if (r.result.status == fibra::RunResult::Status::Converged) {
     fmt::print("{}: converged: {} increments, {} Newton iterations, {:.2f} s ({} nodes, {} dofs)\n", path,
                s.increments, s.iterations, r.wall_time, r.nodes, r.dofs);

@@ -25,6 +25,9 @@ class Increment:
     step_end: bool  #: the step's last increment
     settled: bool  #: an equilibrium without drag (a point of the step's curve, for tests)
     contact_elements: int  #: active contact elements
+    #: load steps: negative pivots of the tangent at this equilibrium, its unstable modes
+    #: (0: stable; -1: unknown; docs/outputs.md, stability:negative_pivots)
+    negative_pivots: int
 
     def __str__(self):
         return (f'step {self.step_index + 1} "{self.step}"  load {self.load_factor:6.4f}  '

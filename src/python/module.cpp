@@ -74,6 +74,7 @@ py::dict increment_dict(const fibra::IncrementInfo& i) {
   d["step_end"] = i.step_end;
   d["settled"] = i.settled;
   d["contact_elements"] = i.contact.elements;
+  d["negative_pivots"] = i.negative_pivots;
   return d;
 }
 
@@ -93,6 +94,7 @@ py::dict report_dict(const fibra::RunReport& r, bool by_signal) {
   stats["cuts"] = r.stats.cuts;
   stats["factorizations"] = r.stats.factorizations;
   stats["krylov_iterations"] = r.stats.krylov_iterations;
+  stats["indefinite_iterations"] = r.stats.indefinite_iterations;
   d["stats"] = stats;
   py::dict counts;
   counts["fibers"] = r.fibers;

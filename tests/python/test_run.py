@@ -24,6 +24,7 @@ def test_the_cantilever_matches_the_elastica(tmp_path):
     assert [i.total_increments for i in seen] == list(range(1, len(seen) + 1))
     assert seen[-1].load_factor == 1.0 and seen[-1].step_end and seen[-1].step == "load"
     assert all(i.residual < 1e-6 for i in seen)
+    assert all(i.negative_pivots == 0 for i in seen)  # a stable equilibrium at every load
     tip = result.fibers["beam"].positions[-1]
     # Bisshopp & Drucker, P L^2 / (E I) = 2: tip deflection 0.4935 L, shortening 0.1606 L.
     assert tip[2] == pytest.approx(-0.4935, abs=2e-3)
@@ -33,6 +34,45 @@ def test_the_cantilever_matches_the_elastica(tmp_path):
     assert h["load_factor"][-1] == 1.0
     reaction = [n for n in h.dtype.names if n.startswith("reaction:beam:first:z")]
     assert reaction and h[reaction[0]][-1] == pytest.approx(3298.67, rel=1e-6)
+
+
+def test_a_column_past_its_euler_load_is_reported_unstable(tmp_path):
+    # Clamped-free, compressed to 2.2 times P_cr = pi^2 E I / (4 L^2) in 4 increments: past P_cr
+    # the load step follows the straight equilibrium, unstable in both bending planes (below
+    # the second mode's 9 P_cr: one negative pivot per plane).
+    young, radius, length = 1e9, 0.01, 1.0
+    critical = np.pi**2 * young * np.pi * radius**4 / 4 / (4 * length**2)
+    case = tmp_path / "column.toml"
+    case.write_text(textwrap.dedent(f"""
+        [[material]]
+        name = "m"
+        young = {young}
+        poisson = 0.3
+        [[fiber]]
+        name = "column"
+        material = "m"
+        radius = {radius}
+        points = [[0, 0, 0], [{length}, 0, 0]]
+        elements = 20
+        [[fix]]
+        fiber = "column"
+        node = "first"
+        [[step]]
+        name = "compress"
+        increments = 4
+          [[step.load]]
+          fiber = "column"
+          node = "last"
+          force = [{-2.2 * critical!r}, 0, 0]
+        """))
+    seen = []
+    result = fibra.run(case, out=tmp_path / "c", threads=1, progress=seen.append)
+    assert result.converged
+    assert [i.negative_pivots for i in seen] == [0, 2, 2, 2]  # 0.55, 1.1, 1.65, 2.2 P_cr
+    assert list(result.history["stability:negative_pivots"]) == [0, 0, 2, 2, 2]
+    assert result.report["stats"]["indefinite_iterations"] > 0
+    assert result.summary["unstable_equilibria"] == {
+        "increments": 3, "first": {"step": "compress", "increment": 2, "load_factor": 0.5, "negative_pivots": 2}}
 
 
 def test_a_case_file_and_a_run_from_python_write_the_same_outputs(tmp_path):

@@ -15,27 +15,6 @@ struct KnownFailure {
 };
 
 inline constexpr KnownFailure kKnownFailures[] = {
-    {"rollup_half",
-     "stops at load factor 0.525 (turn 0.525 pi): the planar arc buckles sideways past M = (pi/2) G J / L (the "
-     "tangent indefinite from there, its softest mode the tip out of the plane: under the moment conservative "
-     "about its fixed axis the circle is an equilibrium, not a minimum, docs/robustness.md); with the shifted "
-     "factor Newton's residual falls only linearly, 4.7e-5 to 2.3e-6 in 25 iterations; 12 cuts down to an increment "
-     "of 2.4e-5"},
-    {"rollup_full_nu0",
-     "stops at load factor 0.2625 (turn 0.525 pi, a quarter of the load): tangent indefinite from load factor 0.2 "
-     "(softest mode out of the plane at the tip, v.Hv = -7e-4 against a mean diagonal of 1.45e7); in the last "
-     "attempt the residual falls to 3.7e-9 in 5 iterations, then climbs by 1.9 per iteration to 7.2e-4 at "
-     "iteration 25; 12 cuts"},
-    {"rollup_full_nu03",
-     "stops at load factor 0.2625 (turn 0.525 pi), the path of rollup_half: tangent indefinite from load factor 0.25 "
-     "(softest mode out of the plane, v.Hv = -2e-3 against a mean diagonal of 1.5e7); with the shifted factor the "
-     "residual falls only linearly, 4.7e-5 to 2.3e-6 in 25 iterations; 12 cuts"},
-    {"ring_pinched_large",
-     "stops at load factor 0.454 (P R^2/EI = 1.36 of 3): from load factor 0.2 the tangent is indefinite, its "
-     "softest mode g1y alone, uniform over every node (v.Hv = -3e-4 against a mean diagonal of 2.3e7); the last "
-     "attempt's residual falls to 2.7e-8 in 6 iterations, then climbs to 3.1e-7 at iteration 25; 12 cuts. Held in "
-     "its plane by fixes (z, g2z, g1x, g1y on every node) the same case converges in 10 increments, its diameters "
-     "within 0.3 % of the elastica"},
     {"three_point_bending_mu0_unheld",
      "converges as a held load step (deflection within 0.08 % of beam theory) but its reactions balance to 5e-6 of "
      "the pusher's force: the beam's rigid motions left free by frictionless contact (sliding along x and y, turning "

@@ -51,6 +51,43 @@ struct Chain {
   }
 };
 
+// The indefinite solver (make_indefinite_solver, load steps' unstable equilibria): a random
+// symmetric matrix of the chain's banded pattern, shifted so that exactly three of its
+// eigenvalues are negative, is factorized; its negative pivots are its negative eigenvalues
+// (Sylvester's law of inertia) and its solves are exact, where the positive definite solvers
+// refuse it. Shifted onto an eigenvalue (singular), it fails.
+TEST(IndefiniteSolver, CountsTheNegativeEigenvaluesAndSolvesExactly) {
+  Chain c;
+  // Diagonal shift between the third and fourth smallest eigenvalues of a random matrix.
+  const Eigen::MatrixXd base = c.random(5, 0.0);
+  const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(base).eigenvalues();
+  const double shift = -0.5 * (ev[2] + ev[3]);
+  ASSERT_GT(ev[3] - ev[2], 1e-3);
+  Eigen::MatrixXd a = base;
+  a.diagonal().array() += shift;
+  const std::vector<double> values = c.values(a);
+  auto solver = make_indefinite_solver();
+  solver->analyze(*c.pattern);
+  ASSERT_EQ(solver->factorize(values, 0.0), FactorStatus::Ok);
+  EXPECT_EQ(solver->negative_pivots(), 3);
+  std::mt19937 gen(2);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  VecX b(c.n()), x;
+  for (Index i = 0; i < c.n(); ++i) b[i] = u(gen);
+  solver->solve(b, x);
+  EXPECT_LT((a * x - b).norm(), 1e-10 * b.norm());
+  // The positive definite solvers refuse it.
+  for (const char* name : {"cholmod", "eigen"}) {
+    auto spd = make_linear_solver(name);
+    spd->analyze(*c.pattern);
+    EXPECT_EQ(spd->factorize(values, 0.0), FactorStatus::NotPositiveDefinite) << name;
+  }
+  // Shifted onto its third eigenvalue: singular.
+  Eigen::MatrixXd singular = base;
+  singular.diagonal().array() -= ev[2];
+  EXPECT_NE(solver->factorize(c.values(singular), 0.0), FactorStatus::Ok);
+}
+
 // The CG budget a factorization is worth: a setting >= 0 as it is; automatic, its flops over 16
 // times its nonzeros, between 20 and 100 (the 480-fiber samples' factor: 3.2e11 flops, 1.9e8
 // nonzeros, 105 -> 100; a small model's: 20).

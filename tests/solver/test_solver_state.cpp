@@ -135,6 +135,7 @@ Checkpoint small_checkpoint() {
   p.krylov_budget = 40;
   p.stats.iterations = 99;
   p.stats.factorizations = 7;
+  p.stats.indefinite_iterations = 5;
   p.detection_memory = {{1, 2, 3}, {}};
   p.factor.valid = true;
   p.factor.q = VecX::LinSpaced(18, 1.0, 2.0);
@@ -170,6 +171,7 @@ TEST_F(StateCounts, ACheckpointReadsBackWhole) {
   EXPECT_EQ(c.progress.krylov_budget, 40);
   EXPECT_EQ(c.progress.stats.iterations, 99);
   EXPECT_EQ(c.progress.stats.factorizations, 7);
+  EXPECT_EQ(c.progress.stats.indefinite_iterations, 5);
   EXPECT_EQ(c.progress.detection_memory, written.progress.detection_memory);
   ASSERT_TRUE(c.progress.factor.valid);
   EXPECT_EQ(c.progress.factor.q, written.progress.factor.q);
@@ -254,8 +256,9 @@ TEST_F(StateCounts, OlderVersionsAreRead) {
 }
 
 // A version-3 checkpoint (no settling residual) is read, and resumes as before the field: the
-// last settling increment's residual unknown (infinite). Made from a version-5 one by cutting
-// the field's 8 bytes and the projection flag after them (found by its value).
+// last settling increment's residual unknown (infinite). Made from a version-6 one by cutting
+// the field's 8 bytes and the projection flag and indefinite count after them (found by its
+// value).
 TEST_F(StateCounts, VersionThreeCheckpointsAreRead) {
   Checkpoint written = small_checkpoint();
   written.progress.factor = FactorSource{};
@@ -266,7 +269,7 @@ TEST_F(StateCounts, VersionThreeCheckpointsAreRead) {
   const std::size_t at = v3.find(pattern);
   ASSERT_NE(at, std::string::npos);
   ASSERT_EQ(v3.find(pattern, at + 1), std::string::npos);
-  v3.erase(at, 9);  // the settling residual and the projection flag (version 5)
+  v3.erase(at, 13);  // the settling residual, the projection flag (5) and the indefinite count (6)
   const std::uint32_t three = 3;
   v3.replace(12, 4, reinterpret_cast<const char*>(&three), 4);
   seal_state_bytes(v3);
@@ -280,8 +283,8 @@ TEST_F(StateCounts, VersionThreeCheckpointsAreRead) {
 }
 
 // A version-4 checkpoint (no projection flag) is read, and resumes with the bindings' projection
-// on, as a run starts. Made from a version-5 one by cutting the flag's byte, which follows the
-// settling residual (found by its value).
+// on, as a run starts. Made from a version-6 one by cutting the flag's byte, which follows the
+// settling residual (found by its value), and the indefinite count after it.
 TEST_F(StateCounts, VersionFourCheckpointsAreRead) {
   Checkpoint written = small_checkpoint();
   written.progress.factor = FactorSource{};
@@ -293,7 +296,7 @@ TEST_F(StateCounts, VersionFourCheckpointsAreRead) {
   ASSERT_NE(at, std::string::npos);
   ASSERT_EQ(v4.find(pattern, at + 1), std::string::npos);
   ASSERT_EQ(v4[at + 8], '\0');  // the flag, false in small_checkpoint
-  v4.erase(at + 8, 1);
+  v4.erase(at + 8, 5);
   const std::uint32_t four = 4;
   v4.replace(12, 4, reinterpret_cast<const char*>(&four), 4);
   seal_state_bytes(v4);
@@ -303,6 +306,32 @@ TEST_F(StateCounts, VersionFourCheckpointsAreRead) {
   EXPECT_EQ(c.progress.settling_residual, 3.5e-3);
   EXPECT_EQ(c.progress.relax_drag, 123.0);
   EXPECT_FALSE(c.progress.factor.valid);
+  EXPECT_EQ(c.case_text, written.case_text);
+}
+
+// A version-5 checkpoint (no count of indefinite iterations) is read, the count starting at 0.
+// Made from a version-6 one by cutting the count's 4 bytes, which follow the projection flag.
+TEST_F(StateCounts, VersionFiveCheckpointsAreRead) {
+  Checkpoint written = small_checkpoint();
+  written.progress.factor = FactorSource{};
+  write_checkpoint_file((m_dir / "checkpoint.bin").string(), written);
+  std::string v5 = read_bytes(m_dir / "checkpoint.bin");
+  const double field = 3.5e-3;
+  const std::string pattern(reinterpret_cast<const char*>(&field), 8);
+  const std::size_t at = v5.find(pattern);
+  ASSERT_NE(at, std::string::npos);
+  const std::int32_t five_iterations = 5;
+  ASSERT_EQ(v5.compare(at + 9, 4, reinterpret_cast<const char*>(&five_iterations), 4), 0);
+  v5.erase(at + 9, 4);
+  const std::uint32_t five = 5;
+  v5.replace(12, 4, reinterpret_cast<const char*>(&five), 4);
+  seal_state_bytes(v5);
+  std::ofstream(m_dir / "v5.bin", std::ios::binary | std::ios::trunc) << v5;
+  const Checkpoint c = read_checkpoint_file((m_dir / "v5.bin").string());
+  EXPECT_EQ(c.progress.stats.indefinite_iterations, 0);
+  EXPECT_EQ(c.progress.stats.factorizations, 7);
+  EXPECT_EQ(c.progress.settling_residual, 3.5e-3);
+  EXPECT_FALSE(c.progress.project_hessians);
   EXPECT_EQ(c.case_text, written.case_text);
 }
 

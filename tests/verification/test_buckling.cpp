@@ -139,14 +139,15 @@ dofs = ["y", "z"]
   for (Index k = 0; k < s.model.fibers[0].num_nodes; ++k) EXPECT_NEAR(s.x0(k).y(), 0.0, 1e-12);
 }
 
-// Past a buckling load the tangent is indefinite at every Newton iteration, and each of them
-// searches for a shift: the search starts at a hundredth of the last shift that passed (not at
-// 1e-14 of the mean diagonal), so it takes one or two factorizations beyond the refused one,
-// not up to eight. A cantilever rolled up by an end moment about a fixed axis, free in 3D
-// (nu = 0.3), is unstable out of its plane beyond M = (pi/2) G J / L, 0.19 of the full circle's
-// moment (docs/theory/solver.md): the corpus's rollup_full_nu03, a known failure, which stops
-// near a quarter of its load after hundreds of shifted iterations.
-TEST(Buckling, ShiftSearchStartsFromTheLastShiftPastALateralBuckling) {
+// Past a buckling load a load step follows its (unstable) equilibrium path with exact Newton
+// steps on the indefinite tangent (LDL^T, docs/theory/solver.md, "Unstable equilibria in load
+// steps"), not with shifted ones: a cantilever rolled up by an end moment about a fixed axis,
+// free in 3D (nu = 0.3), is unstable out of its plane beyond M = (pi/2) G J / L, 0.19 of the
+// full circle's moment. It rolls up to the full circle in its 20 increments, none cut and none
+// shifted, at most 15 Newton iterations each (with shifted steps, it stopped near a quarter of
+// its load after hundreds of shifted iterations), and every increment past that moment reports
+// its tangent's negative pivots.
+TEST(Buckling, ALoadStepPastALateralBucklingTakesExactSteps) {
   const double ei = 210e9 * kPi * 1e-12 / 4.0;  // steel, r = 1 mm
   const Solved s = solve_toml(straight_cantilever(1.0, 1e-3, 20, 210e9, 0.3, fmt::format(R"(
 [[step]]
@@ -158,10 +159,21 @@ increments = 20
   moment = [0, {:.17g}, 0]
 )",
                                                                                       2.0 * kPi * ei)));
-  std::printf("%d Newton iterations, %d factorizations, %d with a shift, %d shifted iterations\n", s.stats.iterations,
-              s.stats.factorizations, s.stats.regularized_factorizations, s.stats.shifted_iterations);
-  EXPECT_GT(s.stats.shifted_iterations, 20);
-  EXPECT_LE(s.stats.regularized_factorizations, 3 * s.stats.shifted_iterations);
+  std::printf("%d Newton iterations, %d factorizations, %d indefinite iterations, %d shifted iterations\n",
+              s.stats.iterations, s.stats.factorizations, s.stats.indefinite_iterations, s.stats.shifted_iterations);
+  ASSERT_TRUE(s.converged());
+  EXPECT_EQ(s.stats.cuts, 0);
+  EXPECT_EQ(s.stats.shifted_iterations, 0);
+  EXPECT_GT(s.stats.indefinite_iterations, 0);
+  ASSERT_EQ(s.increments.size(), 20u);
+  const double critical = 0.25 / 1.3;
+  for (const IncrementInfo& info : s.increments) {
+    EXPECT_LE(info.iterations, 15) << "load factor " << info.load_factor;
+    if (info.load_factor > 1.03 * critical) EXPECT_GE(info.negative_pivots, 1) << "load factor " << info.load_factor;
+    if (info.load_factor < 0.97 * critical) EXPECT_EQ(info.negative_pivots, 0) << "load factor " << info.load_factor;
+  }
+  // The tip back at the root (the planar circle).
+  EXPECT_LT(s.x0(-1).norm(), 1e-3);
 }
 
 }  // namespace

@@ -179,6 +179,10 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                          return st.kind == StepSpec::Kind::Weave || st.is_proximal();
                        });
   if (dragged) columns.insert(columns.end(), {"relax:drag_residual", "relax:spin_residual", "relax:drag"});
+  // Load steps: the stability of each increment's equilibrium (negative pivots of its tangent).
+  const bool loaded = std::any_of(c.steps.begin(), c.steps.end(),
+                                  [](const StepSpec& st) { return st.kind == StepSpec::Kind::Standard; });
+  if (loaded) columns.push_back("stability:negative_pivots");
   // Woven samples: the fabric report (model/fabric_report.hpp) per increment, O(nodes).
   const bool fabric = !c.tows.empty();
   if (fabric) columns.insert(columns.end(), {"fabric:warp_crimp", "fabric:weft_crimp", "fabric:thickness"});
@@ -198,6 +202,8 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   nlohmann::json last_fabric_json;  // to_json(*last_fabric), or a resumed run's
   std::string last_fabric_step;
   nlohmann::json fabric_steps = nlohmann::json::array();
+  // Load steps' increments that ended on an unstable equilibrium (negative pivots), and the first.
+  nlohmann::json unstable = {{"increments", 0}, {"first", nullptr}};
   double time_fabric = 0.0;
   auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   double time_output = 0.0;
@@ -266,7 +272,8 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                         {"states", states},
                         {"checkpoint_step", checkpoint_step},
                         {"step_started", step_started},
-                        {"last_wall", last_wall}};
+                        {"last_wall", last_wall},
+                        {"unstable", unstable}};
     return nlohmann::json{{"writer", writer.resume_point()}, {"plots", plotter.resume_point()}, {"run", r}};
   };
   if (resumed) {
@@ -284,6 +291,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     checkpoint_step = r.at("checkpoint_step").get<int>();
     step_started = r.at("step_started").get<double>();
     last_wall = r.at("last_wall").get<double>();
+    if (r.contains("unstable")) unstable = r.at("unstable");
     written_checkpoint = resumed->progress.total;
     last_checkpoint_wall = wall_offset;
     if (curves_step >= 0) {
@@ -378,6 +386,15 @@ RunReport run_case(const Case& c, const RunOptions& options) {
     }
     if (bodies) row.extra.insert(row.extra.end(), {double(info.binding_updates), info.binding_violation});
     if (dragged) row.extra.insert(row.extra.end(), {info.relax_residual, info.spin_residual, info.drag});
+    if (loaded) row.extra.push_back(double(info.negative_pivots));
+    if (info.negative_pivots > 0) {
+      unstable["increments"] = unstable["increments"].get<int>() + 1;
+      if (unstable["first"].is_null())
+        unstable["first"] = {{"step", info.step},
+                             {"increment", info.increment},
+                             {"load_factor", info.load_factor},
+                             {"negative_pivots", info.negative_pivots}};
+    }
     if (rep) row.extra.insert(row.extra.end(), {rep->warp_crimp, rep->weft_crimp, rep->thickness});
     if (rep && info.step_end) {
       const StepSpec::Kind kind = st.kind;
@@ -580,6 +597,14 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   report.slices = slice_files;
   for (const nlohmann::json& e : states) report.states.push_back(e["file"].get<std::string>());
   report.wall_time = wall_offset + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  report.unstable_increments = unstable["increments"].get<int>();
+  if (report.unstable_increments > 0) {
+    const nlohmann::json& f = unstable["first"];
+    const int pivots = f["negative_pivots"].get<int>();
+    report.first_unstable = fmt::format("step \"{}\" at load factor {:.4g} ({} negative pivot{})",
+                                        f["step"].get<std::string>(), f["load_factor"].get<double>(), pivots,
+                                        pivots == 1 ? "" : "s");
+  }
 
   const SolverStats& s = report.stats;
   nlohmann::json j;
@@ -624,6 +649,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
   }
   if (!c.start.empty()) j["start"] = {{"from", c.start}, {"step", c.start_step}, {"file", c.start_state}};
   j["states"] = states;
+  if (loaded) j["unstable_equilibria"] = unstable;
   if (resumed)
     j["resumed_from"] = {{"step", resumed->state.step},
                          {"increment", resumed->progress.done},
@@ -637,6 +663,7 @@ RunReport run_case(const Case& c, const RunOptions& options) {
                  {"factorizations", s.factorizations},
                  {"regularized_factorizations", s.regularized_factorizations},
                  {"shifted_iterations", s.shifted_iterations},
+                 {"indefinite_iterations", s.indefinite_iterations},
                  {"reused_factorizations", s.reused_factorizations},
                  {"krylov_iterations", s.krylov_iterations},
                  {"line_search_trials", s.line_search_trials},

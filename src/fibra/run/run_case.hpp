@@ -35,6 +35,10 @@ struct RunReport {
   SolverStats stats;
   Index fibers = 0, nodes = 0, dofs = 0, elements = 0;
   double wall_time = 0;  ///< [s]
+  /// Load steps' increments whose equilibrium is unstable (IncrementInfo::negative_pivots > 0),
+  /// and where the first of them is ("step \"NAME\" at load factor ..."; empty when none).
+  int unstable_increments = 0;
+  std::string first_unstable;
   VecX final_state;      ///< nodal values at the last converged increment
   std::optional<FabricReport> fabric;  ///< with tows: the report at the end of the last completed step
   // Files written, relative to the output directory (for the list a run prints at its end).

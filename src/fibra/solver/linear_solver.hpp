@@ -56,11 +56,18 @@ class LinearSolver {
   virtual double factor_nonzeros() const { return 0; }
   /// Floating-point operations of one numeric factorization, from the last analysis (0 if unknown).
   virtual double factor_flops() const { return 0; }
+  /// Negative pivots of the last factorization (an indefinite solver's; 0 otherwise).
+  virtual Index negative_pivots() const { return 0; }
 };
 
 /// Creates a solver by name ("cholmod" or "eigen"); throws std::invalid_argument otherwise.
 /// `ordering` (CHOLMOD only): "metis" (default), "amd", or "auto" (CHOLMOD's own choice: AMD,
 /// then METIS when AMD fills badly).
 std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name, const std::string& ordering = "metis");
+
+/// A solver of symmetric indefinite systems: LDL^T without pivoting (Eigen's simplicial), whose
+/// factorize() accepts negative pivots and fails on a pivot within round-off (1e-13) of zero
+/// relative to the largest (a singular matrix); negative_pivots() counts the negative ones.
+std::unique_ptr<LinearSolver> make_indefinite_solver();
 
 }  // namespace fibra

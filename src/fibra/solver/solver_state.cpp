@@ -23,8 +23,8 @@ namespace {
 // mark, and (from version 3) the CRC-32 of every byte before it. A truncated file is shorter
 // than its length, a damaged one fails its checksum.
 constexpr char kMagic[] = "fibra state\n";
-constexpr std::uint32_t kVersion = 5;  // 2: test_drag; 3: kind, length, checksum, checkpoints; 4: settling_residual;
-                                       // 5: project_hessians
+constexpr std::uint32_t kVersion = 6;  // 2: test_drag; 3: kind, length, checksum, checkpoints; 4: settling_residual;
+                                       // 5: project_hessians; 6: indefinite_iterations
 constexpr char kEnd[] = "end of state\n";
 constexpr std::size_t kMagicSize = sizeof(kMagic) - 1;
 constexpr std::size_t kEndSize = sizeof(kEnd) - 1;
@@ -302,6 +302,7 @@ void put_progress(Out& o, const SolverProgress& p) {
   }
   o.put(p.settling_residual);
   o.put(static_cast<std::uint8_t>(p.project_hessians));
+  o.put(static_cast<std::int32_t>(p.stats.indefinite_iterations));
   const FactorSource& f = p.factor;
   o.put(static_cast<std::uint8_t>(f.valid));
   if (!f.valid) return;
@@ -363,11 +364,12 @@ SolverProgress get_progress(In& in, const ModelFingerprint& model, Index nodes, 
   }
   if (version >= 4) p.settling_residual = in.get<double>();
   if (version >= 5) p.project_hessians = flag();
+  if (version >= 6) p.stats.indefinite_iterations = in.get<std::int32_t>();
   if (p.step < 0 || p.total < 0 || p.done < 0 || p.attempts < 0 || !(p.lambda >= 0.0 && p.lambda <= 1.0) ||
       !(p.dl >= 0.0 && p.dl <= 1.0) || p.force_start.size() != model.dofs || p.iteration_factor < 1 ||
       p.iteration_factor > 4 || !(p.last_dl >= 0.0 && p.last_dl <= 1.0) ||
       (p.last_dl > 0.0 && p.last_motion.size() != model.dofs) || !std::isfinite(p.relax_drag) || p.relax_drag < 0.0 ||
-      !(p.settling_residual >= 0.0))
+      !(p.settling_residual >= 0.0) || p.stats.indefinite_iterations < 0)
     in.bad("its progress within the step is out of range: the file is corrupt");
   FactorSource& f = p.factor;
   f.valid = flag();

@@ -61,6 +61,9 @@ struct SolverStats {
   int factorizations = 0;
   int regularized_factorizations = 0;  ///< factorizations attempted with a shift
   int shifted_iterations = 0;     ///< Newton iterations solved with a shifted factor
+  /// Load steps: Newton iterations solved exactly with an indefinite tangent (LDL^T), on an
+  /// unstable equilibrium path.
+  int indefinite_iterations = 0;
   int line_search_trials = 0;
   int searched_solves = 0;        ///< Newton solves in which the line search shortened a step
   int roundoff_convergences = 0;  ///< increments accepted at the round-off floor of the residual

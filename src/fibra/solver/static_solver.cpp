@@ -618,6 +618,32 @@ StallDiagnosis StaticSolver::diagnose_stall(const VecX& failed) {
   return diag;
 }
 
+int StaticSolver::tangent_negative_pivots() {
+  m_problem->evaluate(m_q, nullptr, &m_hessian);
+  const auto t0 = std::chrono::steady_clock::now();
+  ++m_stats.factorizations;
+  const bool definite = m_linear->factorize(m_hessian, 0.0) == FactorStatus::Ok;
+  m_cg_excess = 0;
+  m_fresh_cg = -1;
+  m_reuse_factor = definite;
+  if (definite) {
+    m_krylov_budget = krylov_budget(m_case.solver.method.krylov_iterations, m_linear->factor_flops(),
+                                    m_linear->factor_nonzeros());
+    record_factor_source(0.0);
+  } else {
+    m_factor_source.valid = false;
+  }
+  int negative = 0;
+  if (!definite) {
+    if (!m_saddle) m_saddle = make_indefinite_solver();
+    m_saddle->analyze(m_problem->pattern());
+    ++m_stats.factorizations;
+    negative = m_saddle->factorize(m_hessian, 0.0) == FactorStatus::Ok ? static_cast<int>(m_saddle->negative_pivots()) : -1;
+  }
+  m_stats.time_factorization += seconds_since(t0);
+  return negative;
+}
+
 bool StaticSolver::newton(std::vector<double>& history, int& iterations, double& residual) {
   const SolverSpec& opt = m_case.solver;
   const std::vector<char>& fixed = m_problem->fixed();
@@ -756,6 +782,23 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       // lost the negative curvature its members' beams balance, and it took 2,324 iterations
       // and ended 1.2e-5 rad off its angle.
       bool projected = false;
+      // A load step (no drag) follows its equilibrium path, stable or not: past a bifurcation
+      // its tangent is indefinite and factorized as it is (LDL^T), and the step is Newton's own
+      // (docs/theory/solver.md, "Unstable equilibria in load steps"). With shifted steps instead
+      // the roll-ups free in 3D stopped near their lateral buckling moment, the residual falling
+      // only linearly, after 400-540 Newton iterations; with exact ones they roll up to the full
+      // circle in 112-233. A singular tangent (a mechanism) goes on to the projection and the
+      // shift.
+      bool saddle = false;
+      if (st == FactorStatus::NotPositiveDefinite && m_problem->drag() == 0.0) {
+        if (!m_saddle) m_saddle = make_indefinite_solver();
+        m_saddle->analyze(m_problem->pattern());
+        ++m_stats.factorizations;
+        if (m_saddle->factorize(m_hessian, 0.0) == FactorStatus::Ok) {
+          saddle = true;
+          st = FactorStatus::Ok;
+        }
+      }
       if (st == FactorStatus::NotPositiveDefinite && m_run.project_hessians) {
         projected = m_problem->projected_hessian(m_q, m_hessian) > 0;
         if (projected) {
@@ -779,13 +822,16 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
         m_last_shift = shift / mean_diag;
         ++m_stats.shifted_iterations;
       }
+      if (saddle) ++m_stats.indefinite_iterations;
       m_cg_excess = 0;
       m_fresh_cg = -1;
       m_krylov_budget = krylov_budget(opt.method.krylov_iterations, m_linear->factor_flops(),
                                       m_linear->factor_nonzeros());
       if (debug_newton())
         fmt::print(stderr, "  it {:2d} factorized ({:.2f} s){}\n", iterations, seconds_since(t0),
-                   projected ? ", the indefinite local Hessians projected" : "");
+                   projected ? ", the indefinite local Hessians projected"
+                   : saddle  ? fmt::format(", indefinite ({} negative pivots)", m_saddle->negative_pivots())
+                             : std::string());
       m_stats.factor_nonzeros = m_linear->factor_nonzeros();
       if (st != FactorStatus::Ok) return false;
       if (shift > 0.0 && debug_newton() && !spectra_printed) {
@@ -793,12 +839,12 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
         print_indefinite_tangent(shift, mean_diag);
       }
       // Only the factor of a (nearly) unshifted tangent preconditions later iterations.
-      m_reuse_factor = shift <= 1e-10 * mean_diag && !projected;
+      m_reuse_factor = shift <= 1e-10 * mean_diag && !projected && !saddle;
       if (m_reuse_factor) record_factor_source(shift);
       else m_factor_source.valid = false;
-      damped = !m_reuse_factor;
+      damped = !m_reuse_factor && !saddle;
       t0 = std::chrono::steady_clock::now();
-      m_linear->solve(m_rhs, dq);
+      (saddle ? *m_saddle : *m_linear).solve(m_rhs, dq);
       m_stats.time_solve += seconds_since(t0);
     }
     for (Index d = 0; d < n; ++d)
@@ -1362,6 +1408,11 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       info.relax_residual = proximal ? m_run.relax_residual : 0.0;
       info.spin_residual = proximal ? drag_residual(DragPart::Sections) : 0.0;
       info.drag = solved.drag;
+      // A load step's equilibrium: its stability, from the exact tangent at the accepted state
+      // (its factor then preconditions the next increment). A held step's tangent holds the
+      // drag: unknown (-1).
+      if (st.kind == StepSpec::Kind::Standard)
+        info.negative_pivots = m_problem->drag() == 0.0 ? tangent_negative_pivots() : -1;
       info.reactions = reactions(m_gradient);
       if (m_bodies) {
         info.binding_updates = m_binding_updates;

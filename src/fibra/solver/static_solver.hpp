@@ -52,6 +52,10 @@ struct IncrementInfo {
   /// (the fibers' spin about their axes, held by the drag), relative to the reference force.
   double spin_residual = 0;
   double drag = 0;                ///< drag stiffness per node the increment was solved with [N/m] (0 without drag)
+  /// Load steps: negative pivots of the tangent at the accepted state (LDL^T), the unstable
+  /// modes of the equilibrium: 0 for a stable one, -1 when unknown (a singular tangent, or a
+  /// held step's, solved with a drag); 0 in other steps.
+  int negative_pivots = 0;
 };
 
 /// Outcome of a run.
@@ -128,6 +132,9 @@ class StaticSolver {
   /// (release_positions).
   bool solve_increment(int step, double lambda, std::vector<double>& history, int& iterations, double& residual,
                        bool positions_released = false);
+  /// Negative pivots of the exact tangent at the current state (LDL^T); -1 when it is singular.
+  /// Its factor, when positive definite, preconditions the next Newton solves.
+  int tangent_negative_pivots();
   bool newton(std::vector<double>& history, int& iterations, double& residual);
   /// Developers' trace of a shifted factorization (FIBRA_DEBUG_NEWTON): the indefinite local
   /// Hessians and the tangent's softest mode, by inverse iteration with the current factor.
@@ -176,6 +183,7 @@ class StaticSolver {
   std::unique_ptr<BodySystem> m_bodies;  // null without [[body]]
   std::unique_ptr<Problem> m_problem;
   std::unique_ptr<LinearSolver> m_linear;
+  std::unique_ptr<LinearSolver> m_saddle;  // load steps' indefinite tangents (exact Newton steps)
   std::unique_ptr<Program> m_program;
   std::unique_ptr<ContactManager> m_contact;  // null without [contact]
   ContactStats m_contact_stats;
