@@ -255,84 +255,61 @@ TEST_F(StateCounts, OlderVersionsAreRead) {
   EXPECT_NE(read_error(m_dir, v2.substr(0, v2.size() / 2)).find("ends early"), std::string::npos);
 }
 
-// A version-3 checkpoint (no settling residual) is read, and resumes as before the field: the
-// last settling increment's residual unknown (infinite). Made from a version-6 one by cutting
-// the field's 8 bytes and the projection flag and indefinite count after them (found by its
-// value).
-TEST_F(StateCounts, VersionThreeCheckpointsAreRead) {
+// An older checkpoint, made from small_checkpoint() written today (version 6, no factor) by
+// cutting `count` bytes at `offset` from the settling residual (found by its value, 3.5e-3:
+// 8 bytes, then the projection flag of version 5, 1 byte, then the count of indefinite
+// iterations of version 6, 4 bytes) and writing `version` into the header.
+Checkpoint older_checkpoint(const fs::path& dir, std::size_t offset, std::size_t count, std::uint32_t version) {
   Checkpoint written = small_checkpoint();
   written.progress.factor = FactorSource{};
-  write_checkpoint_file((m_dir / "checkpoint.bin").string(), written);
-  std::string v3 = read_bytes(m_dir / "checkpoint.bin");
+  write_checkpoint_file((dir / "checkpoint.bin").string(), written);
+  std::string bytes = read_bytes(dir / "checkpoint.bin");
   const double field = 3.5e-3;
   const std::string pattern(reinterpret_cast<const char*>(&field), 8);
-  const std::size_t at = v3.find(pattern);
-  ASSERT_NE(at, std::string::npos);
-  ASSERT_EQ(v3.find(pattern, at + 1), std::string::npos);
-  v3.erase(at, 13);  // the settling residual, the projection flag (5) and the indefinite count (6)
-  const std::uint32_t three = 3;
-  v3.replace(12, 4, reinterpret_cast<const char*>(&three), 4);
-  seal_state_bytes(v3);
-  std::ofstream(m_dir / "v3.bin", std::ios::binary | std::ios::trunc) << v3;
-  const Checkpoint c = read_checkpoint_file((m_dir / "v3.bin").string());
-  EXPECT_EQ(c.progress.settling_residual, std::numeric_limits<double>::infinity());
-  EXPECT_EQ(c.progress.relax_drag, 123.0);
-  EXPECT_EQ(c.progress.detection_memory, written.progress.detection_memory);
-  EXPECT_FALSE(c.progress.factor.valid);
-  EXPECT_EQ(c.case_text, written.case_text);
+  const std::size_t at = bytes.find(pattern);
+  EXPECT_NE(at, std::string::npos);
+  EXPECT_EQ(bytes.find(pattern, at + 1), std::string::npos);
+  EXPECT_EQ(bytes[at + 8], '\0');  // the projection flag, false in small_checkpoint
+  const std::int32_t indefinite = 5;
+  EXPECT_EQ(bytes.compare(at + 9, 4, reinterpret_cast<const char*>(&indefinite), 4), 0);
+  bytes.erase(at + offset, count);
+  bytes.replace(12, 4, reinterpret_cast<const char*>(&version), 4);
+  seal_state_bytes(bytes);
+  const fs::path file = dir / ("v" + std::to_string(version) + ".bin");
+  std::ofstream(file, std::ios::binary | std::ios::trunc) << bytes;
+  return read_checkpoint_file(file.string());
 }
 
-// A version-4 checkpoint (no projection flag) is read, and resumes with the bindings' projection
-// on, as a run starts. Made from a version-6 one by cutting the flag's byte, which follows the
-// settling residual (found by its value), and the indefinite count after it.
+// A version-3 checkpoint (no settling residual) is read, and resumes as before the field: the
+// last settling increment's residual unknown (infinite).
+TEST_F(StateCounts, VersionThreeCheckpointsAreRead) {
+  const Checkpoint c = older_checkpoint(m_dir, 0, 13, 3);
+  EXPECT_EQ(c.progress.settling_residual, std::numeric_limits<double>::infinity());
+  EXPECT_EQ(c.progress.relax_drag, 123.0);
+  EXPECT_EQ(c.progress.detection_memory, small_checkpoint().progress.detection_memory);
+  EXPECT_FALSE(c.progress.factor.valid);
+  EXPECT_EQ(c.case_text, small_checkpoint().case_text);
+}
+
+// A version-4 checkpoint (no projection flag) is read, and resumes with the projection on, as a
+// run starts.
 TEST_F(StateCounts, VersionFourCheckpointsAreRead) {
-  Checkpoint written = small_checkpoint();
-  written.progress.factor = FactorSource{};
-  write_checkpoint_file((m_dir / "checkpoint.bin").string(), written);
-  std::string v4 = read_bytes(m_dir / "checkpoint.bin");
-  const double field = 3.5e-3;
-  const std::string pattern(reinterpret_cast<const char*>(&field), 8);
-  const std::size_t at = v4.find(pattern);
-  ASSERT_NE(at, std::string::npos);
-  ASSERT_EQ(v4.find(pattern, at + 1), std::string::npos);
-  ASSERT_EQ(v4[at + 8], '\0');  // the flag, false in small_checkpoint
-  v4.erase(at + 8, 5);
-  const std::uint32_t four = 4;
-  v4.replace(12, 4, reinterpret_cast<const char*>(&four), 4);
-  seal_state_bytes(v4);
-  std::ofstream(m_dir / "v4.bin", std::ios::binary | std::ios::trunc) << v4;
-  const Checkpoint c = read_checkpoint_file((m_dir / "v4.bin").string());
+  const Checkpoint c = older_checkpoint(m_dir, 8, 5, 4);
   EXPECT_TRUE(c.progress.project_hessians);
   EXPECT_EQ(c.progress.settling_residual, 3.5e-3);
   EXPECT_EQ(c.progress.relax_drag, 123.0);
   EXPECT_FALSE(c.progress.factor.valid);
-  EXPECT_EQ(c.case_text, written.case_text);
+  EXPECT_EQ(c.case_text, small_checkpoint().case_text);
 }
 
 // A version-5 checkpoint (no count of indefinite iterations) is read, the count starting at 0.
-// Made from a version-6 one by cutting the count's 4 bytes, which follow the projection flag.
 TEST_F(StateCounts, VersionFiveCheckpointsAreRead) {
-  Checkpoint written = small_checkpoint();
-  written.progress.factor = FactorSource{};
-  write_checkpoint_file((m_dir / "checkpoint.bin").string(), written);
-  std::string v5 = read_bytes(m_dir / "checkpoint.bin");
-  const double field = 3.5e-3;
-  const std::string pattern(reinterpret_cast<const char*>(&field), 8);
-  const std::size_t at = v5.find(pattern);
-  ASSERT_NE(at, std::string::npos);
-  const std::int32_t five_iterations = 5;
-  ASSERT_EQ(v5.compare(at + 9, 4, reinterpret_cast<const char*>(&five_iterations), 4), 0);
-  v5.erase(at + 9, 4);
-  const std::uint32_t five = 5;
-  v5.replace(12, 4, reinterpret_cast<const char*>(&five), 4);
-  seal_state_bytes(v5);
-  std::ofstream(m_dir / "v5.bin", std::ios::binary | std::ios::trunc) << v5;
-  const Checkpoint c = read_checkpoint_file((m_dir / "v5.bin").string());
+  const Checkpoint c = older_checkpoint(m_dir, 9, 4, 5);
   EXPECT_EQ(c.progress.stats.indefinite_iterations, 0);
   EXPECT_EQ(c.progress.stats.factorizations, 7);
   EXPECT_EQ(c.progress.settling_residual, 3.5e-3);
   EXPECT_FALSE(c.progress.project_hessians);
-  EXPECT_EQ(c.case_text, written.case_text);
+  EXPECT_EQ(c.case_text, small_checkpoint().case_text);
 }
 
 }  // namespace
