@@ -773,10 +773,12 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       FactorStatus st = m_linear->factorize(m_hessian, shift);
       ++m_stats.factorizations;
       if (st == FactorStatus::Ok) m_run.project_hessians = true;
-      // Not positive definite: first the terms' local Hessians projected where they are
-      // indefinite (a compressed fiber's element, a moment on a turned section, a turned body
-      // pulled by its members, (lambda + k g) . d2g), then, if that is not enough, the shift. A moment-driven twist of a bound body
-      // (BindingGroup.TwistedByItsBodyThenOneMemberPushedAside) takes 39 factorizations, none
+      // Not positive definite: in a load step the tangent factorized as it is (below);
+      // otherwise, or when it is singular, first the terms' local Hessians projected where
+      // they are indefinite (a compressed fiber's element, a moment on a turned section, a
+      // turned body pulled by its members, (lambda + k g) . d2g), then, if that is not enough,
+      // the shift. A moment-driven twist of a bound body
+      // (BindingGroup.TwistedByItsBodyThenOneMemberPushedAside) took 39 factorizations, none
       // shifted, against 61 with shifts alone (33 shifted) for the same 42 iterations. Only
       // when the exact tangent is refused: projected at every iteration, the twist's tangent
       // lost the negative curvature its members' beams balance, and it took 2,324 iterations
