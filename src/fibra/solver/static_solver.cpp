@@ -618,28 +618,30 @@ StallDiagnosis StaticSolver::diagnose_stall(const VecX& failed) {
   return diag;
 }
 
+void StaticSolver::begin_factor() {
+  m_cg_excess = 0;
+  m_fresh_cg = -1;
+  m_krylov_budget =
+      krylov_budget(m_case.solver.method.krylov_iterations, m_linear->factor_flops(), m_linear->factor_nonzeros());
+}
+
+bool StaticSolver::factorize_indefinite() {
+  if (!m_saddle) m_saddle = make_indefinite_solver();
+  m_saddle->analyze(m_problem->pattern());
+  ++m_stats.factorizations;
+  return m_saddle->factorize(m_hessian, 0.0) == FactorStatus::Ok;
+}
+
 int StaticSolver::tangent_negative_pivots() {
   m_problem->evaluate(m_q, nullptr, &m_hessian);
   const auto t0 = std::chrono::steady_clock::now();
   ++m_stats.factorizations;
   const bool definite = m_linear->factorize(m_hessian, 0.0) == FactorStatus::Ok;
-  m_cg_excess = 0;
-  m_fresh_cg = -1;
+  begin_factor();
   m_reuse_factor = definite;
-  if (definite) {
-    m_krylov_budget = krylov_budget(m_case.solver.method.krylov_iterations, m_linear->factor_flops(),
-                                    m_linear->factor_nonzeros());
-    record_factor_source(0.0);
-  } else {
-    m_factor_source.valid = false;
-  }
-  int negative = 0;
-  if (!definite) {
-    if (!m_saddle) m_saddle = make_indefinite_solver();
-    m_saddle->analyze(m_problem->pattern());
-    ++m_stats.factorizations;
-    negative = m_saddle->factorize(m_hessian, 0.0) == FactorStatus::Ok ? static_cast<int>(m_saddle->negative_pivots()) : -1;
-  }
+  if (definite) record_factor_source(0.0);
+  else m_factor_source.valid = false;
+  const int negative = definite ? 0 : factorize_indefinite() ? static_cast<int>(m_saddle->negative_pivots()) : -1;
   m_stats.time_factorization += seconds_since(t0);
   return negative;
 }
@@ -792,14 +794,9 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       // circle in 112-233. A singular tangent (a mechanism) goes on to the projection and the
       // shift.
       bool saddle = false;
-      if (st == FactorStatus::NotPositiveDefinite && m_problem->drag() == 0.0) {
-        if (!m_saddle) m_saddle = make_indefinite_solver();
-        m_saddle->analyze(m_problem->pattern());
-        ++m_stats.factorizations;
-        if (m_saddle->factorize(m_hessian, 0.0) == FactorStatus::Ok) {
-          saddle = true;
-          st = FactorStatus::Ok;
-        }
+      if (st == FactorStatus::NotPositiveDefinite && m_problem->drag() == 0.0 && factorize_indefinite()) {
+        saddle = true;
+        st = FactorStatus::Ok;
       }
       if (st == FactorStatus::NotPositiveDefinite && m_run.project_hessians) {
         projected = m_problem->projected_hessian(m_q, m_hessian) > 0;
@@ -825,10 +822,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
         ++m_stats.shifted_iterations;
       }
       if (saddle) ++m_stats.indefinite_iterations;
-      m_cg_excess = 0;
-      m_fresh_cg = -1;
-      m_krylov_budget = krylov_budget(opt.method.krylov_iterations, m_linear->factor_flops(),
-                                      m_linear->factor_nonzeros());
+      begin_factor();
       if (debug_newton())
         fmt::print(stderr, "  it {:2d} factorized ({:.2f} s){}\n", iterations, seconds_since(t0),
                    projected ? ", the indefinite local Hessians projected"

@@ -132,6 +132,10 @@ class StaticSolver {
   /// (release_positions).
   bool solve_increment(int step, double lambda, std::vector<double>& history, int& iterations, double& residual,
                        bool positions_released = false);
+  /// After a factorization of m_linear: its CG budget, and no CG solve counted against it yet.
+  void begin_factor();
+  /// Factorizes m_hessian as it is (LDL^T, m_saddle, made on first use); false when singular.
+  bool factorize_indefinite();
   /// Negative pivots of the exact tangent at the current state (LDL^T); -1 when it is singular.
   /// Its factor, when positive definite, preconditions the next Newton solves.
   int tangent_negative_pivots();
