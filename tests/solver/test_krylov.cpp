@@ -11,6 +11,7 @@
 
 #include "fibra/solver/krylov.hpp"
 #include "fibra/solver/linear_solver.hpp"
+#include "fibra/solver/shift_search.hpp"
 #include "verification/verification_support.hpp"
 
 namespace fibra::test {
@@ -89,6 +90,46 @@ TEST(IndefiniteSolver, CountsTheNegativeEigenvaluesAndSolvesExactly) {
   singular.row(7).setZero();
   singular.col(7).setZero();
   EXPECT_NE(solver->factorize(c.values(singular), 0.0), FactorStatus::Ok);
+}
+
+// The shift search of a refused tangent (solver/shift_search.hpp): a random matrix of the
+// chain's pattern whose most negative eigenvalue is -3e-7 of its mean diagonal needs a shift
+// beta above that. From scratch the search tries 1e-14, 1e-12, ..., 1e-6 of the mean diagonal:
+// five factorizations. Started from a hundredth of the last shift that passed (1e-6), it tries
+// 1e-8 and 1e-6: two; from a larger last shift (1e-4), one. A matrix that no shift up to its
+// mean diagonal makes positive definite ends refused, at the mean diagonal.
+TEST(ShiftSearch, StartsFromAHundredthOfTheLastShift) {
+  Chain c;
+  const Eigen::MatrixXd base = c.random(11, 0.0);
+  const double lowest = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(base).eigenvalues()[0];
+  const double m0 = base.diagonal().mean(), ratio = 3e-7;
+  // base + s I: lowest + s = -ratio (m0 + s).
+  const double s = (-ratio * m0 - lowest) / (1.0 + ratio);
+  Eigen::MatrixXd a = base;
+  a.diagonal().array() += s;
+  const double mean_diag = a.diagonal().cwiseAbs().mean();
+  ASSERT_NEAR(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(a).eigenvalues()[0] / mean_diag, -ratio, 1e-9);
+  Eigen::MatrixXd far = a;
+  far.diagonal().array() -= 2.0 * mean_diag;
+  for (const char* name : {"cholmod", "eigen"}) {
+    auto solver = make_linear_solver(name);
+    solver->analyze(*c.pattern);
+    EXPECT_EQ(first_shift(0.0), 1e-14);
+    const struct {
+      double last;
+      int factorizations;
+    } expected[] = {{0.0, 5}, {1e-6, 2}, {1e-4, 1}};
+    for (const auto& [last, count] : expected) {
+      const ShiftSearch r = factorize_shifted(*solver, c.values(a), mean_diag, last);
+      EXPECT_EQ(r.status, FactorStatus::Ok) << name << ", last shift " << last;
+      EXPECT_EQ(r.factorizations, count) << name << ", last shift " << last;
+      EXPECT_NEAR(r.shift / mean_diag, 1e-6, 1e-12) << name << ", last shift " << last;
+    }
+    const ShiftSearch refused = factorize_shifted(*solver, c.values(far), mean_diag, 0.0);
+    EXPECT_EQ(refused.status, FactorStatus::NotPositiveDefinite) << name;
+    EXPECT_NEAR(refused.shift / mean_diag, 1.0, 1e-9) << name;
+    EXPECT_EQ(refused.factorizations, 8) << name;
+  }
 }
 
 // The CG budget a factorization is worth: a setting >= 0 as it is; automatic, its flops over 16

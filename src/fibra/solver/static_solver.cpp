@@ -15,6 +15,7 @@
 #include "fibra/body/rotation.hpp"
 #include "fibra/model/fabric.hpp"
 #include "fibra/solver/krylov.hpp"
+#include "fibra/solver/shift_search.hpp"
 #include "fibra/steps/step_driver.hpp"
 #include "fibra/steps/test_edges.hpp"
 #include "fibra/steps/test_predictor.hpp"
@@ -810,11 +811,12 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
           if (st != FactorStatus::Ok) m_run.project_hessians = false;
         }
       }
-      while (st == FactorStatus::NotPositiveDefinite && shift < mean_diag) {
-        shift = shift == 0.0 ? std::max(1e-14, 1e-2 * m_last_shift) * mean_diag : shift * 100.0;
-        st = m_linear->factorize(m_hessian, shift);
-        ++m_stats.factorizations;
-        ++m_stats.regularized_factorizations;
+      if (st == FactorStatus::NotPositiveDefinite) {
+        const ShiftSearch search = factorize_shifted(*m_linear, m_hessian, mean_diag, m_last_shift);
+        st = search.status;
+        shift = search.shift;
+        m_stats.factorizations += search.factorizations;
+        m_stats.regularized_factorizations += search.factorizations;
       }
       m_stats.time_factorization += seconds_since(t0);
       if (st == FactorStatus::Ok && shift > 0.0) {
