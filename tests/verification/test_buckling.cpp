@@ -169,8 +169,12 @@ increments = 20
   const double critical = 0.25 / 1.3;
   for (const IncrementInfo& info : s.increments) {
     EXPECT_LE(info.iterations, 15) << "load factor " << info.load_factor;
-    if (info.load_factor > 1.03 * critical) EXPECT_GE(info.negative_pivots, 1) << "load factor " << info.load_factor;
-    if (info.load_factor < 0.97 * critical) EXPECT_EQ(info.negative_pivots, 0) << "load factor " << info.load_factor;
+    if (info.load_factor > 1.03 * critical) {
+      EXPECT_GE(info.negative_pivots, 1) << "load factor " << info.load_factor;
+    }
+    if (info.load_factor < 0.97 * critical) {
+      EXPECT_EQ(info.negative_pivots, 0) << "load factor " << info.load_factor;
+    }
   }
   // The tip back at the root (the planar circle).
   EXPECT_LT(s.x0(-1).norm(), 1e-3);

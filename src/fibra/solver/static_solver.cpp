@@ -130,7 +130,7 @@ StaticSolver::StaticSolver(const Case& c, const Model& model, std::unique_ptr<Bo
   m_q_start = m_q;
   m_drag_anchor = m_q;
   m_newton_tolerance = c.solver.residual_tolerance;
-  m_linear->analyze(m_problem->pattern());
+  pattern_changed();
 }
 
 StaticSolver::~StaticSolver() = default;
@@ -239,7 +239,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   m_settling_moved = -1.0;
   bool stalled_increment = false;
   for (int d = 0; d < spec.max_detections; ++d) {
-    if (m_problem->set_contacts(std::move(contacts), friction)) m_linear->analyze(m_problem->pattern());
+    if (m_problem->set_contacts(std::move(contacts), friction)) pattern_changed();
     bool normals_settled = false;
     // Friction: the normal force that sets each element's cone is frozen for a Newton solve
     // and updated with the normals (a fixed point, like them): within the solve the friction
@@ -455,7 +455,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     }
     // New elements: refuse those that start deep inside another fiber (a crossing missed
     // between two detections); the increment is cut.
-    if (m_problem->set_contacts(contacts, friction)) m_linear->analyze(m_problem->pattern());
+    if (m_problem->set_contacts(contacts, friction)) pattern_changed();
     const std::vector<ContactResponse> fresh_responses = m_problem->contact_responses(m_q);
     std::pair<Index, Index> through;
     if (!weave && m_contact->passed_through(m_problem->contacts(), fresh_responses, &through)) {
@@ -626,9 +626,17 @@ void StaticSolver::begin_factor() {
       krylov_budget(m_case.solver.method.krylov_iterations, m_linear->factor_flops(), m_linear->factor_nonzeros());
 }
 
+void StaticSolver::pattern_changed() {
+  m_linear->analyze(m_problem->pattern());
+  m_saddle_analyzed = false;
+}
+
 bool StaticSolver::factorize_indefinite() {
   if (!m_saddle) m_saddle = make_indefinite_solver();
-  m_saddle->analyze(m_problem->pattern());
+  if (!m_saddle_analyzed) {
+    m_saddle->analyze(m_problem->pattern());
+    m_saddle_analyzed = true;
+  }
   ++m_stats.factorizations;
   return m_saddle->factorize(m_hessian, 0.0) == FactorStatus::Ok;
 }
@@ -976,7 +984,7 @@ void StaticSolver::restore_state(const SolverState& s) {
   if (m_bodies) {
     m_bodies->restore(s.bodies);
   }
-  if (m_contact && m_problem->set_contacts(s.contacts, m_contact->friction())) m_linear->analyze(m_problem->pattern());
+  if (m_contact && m_problem->set_contacts(s.contacts, m_contact->friction())) pattern_changed();
   m_program->force_start = m_program->force_end = s.force_end;
   m_program->moments = s.moments;
   m_program->disp = s.disp;
@@ -1074,13 +1082,13 @@ void StaticSolver::refactorize(const FactorSource& f) {
   const std::vector<char> fixed = m_problem->fixed();
   // The problem as the factorization saw it (a checkpoint's record of it).
   if (m_bodies) m_bodies->restore(f.bodies);
-  if (m_contact && m_problem->set_contacts(f.contacts, f.friction)) m_linear->analyze(m_problem->pattern());
+  if (m_contact && m_problem->set_contacts(f.contacts, f.friction)) pattern_changed();
   m_problem->set_drag(f.drag, f.drag_anchor, f.director_weight, f.axial_weight);
   m_problem->moments() = f.moments;
   m_problem->fixed() = f.fixed;
   m_problem->evaluate(f.q, nullptr, &m_hessian);
   const bool ok = m_linear->factorize(m_hessian, f.shift) == FactorStatus::Ok;
-  if (m_problem->restore_lagged(lagged)) m_linear->analyze(m_problem->pattern());
+  if (m_problem->restore_lagged(lagged)) pattern_changed();
   m_problem->set_drag(drag, anchor, director, axial);
   m_problem->moments() = moments;
   m_problem->fixed() = fixed;
@@ -1166,7 +1174,7 @@ bool StaticSolver::release_positions(int step, double lambda, int& iterations) {
   }
   m_q = q;
   m_gradient = gradient;
-  if (m_problem->restore_lagged(lagged)) m_linear->analyze(m_problem->pattern());
+  if (m_problem->restore_lagged(lagged)) pattern_changed();
   m_problem->set_drag(drag, drag_anchor, director, axial);
   m_contact_stats = contact_stats;
   m_binding_updates = binding_updates;
@@ -1316,7 +1324,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         failed_state = m_q;
         failed_refusal = m_refusal;
         m_q = saved;
-        if (m_problem->restore_lagged(saved_lagged)) m_linear->analyze(m_problem->pattern());
+        if (m_problem->restore_lagged(saved_lagged)) pattern_changed();
         ++m_stats.cuts;
         if (step_dl > 0.0) ++m_run.level_failures;
         const bool stiffer = driver->failed(m_run, step_dl);

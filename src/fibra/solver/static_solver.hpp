@@ -134,7 +134,11 @@ class StaticSolver {
                        bool positions_released = false);
   /// After a factorization of m_linear: its CG budget, and no CG solve counted against it yet.
   void begin_factor();
-  /// Factorizes m_hessian as it is (LDL^T, m_saddle, made on first use); false when singular.
+  /// The sparsity pattern changed (contact elements, a restored state): both solvers analyse it
+  /// afresh at their next factorization.
+  void pattern_changed();
+  /// Factorizes m_hessian as it is (LDL^T, m_saddle, made on first use; its ordering computed
+  /// once per pattern); false when singular.
   bool factorize_indefinite();
   /// Negative pivots of the exact tangent at the current state (LDL^T); -1 when it is singular.
   /// Its factor, when positive definite, preconditions the next Newton solves.
@@ -188,6 +192,7 @@ class StaticSolver {
   std::unique_ptr<Problem> m_problem;
   std::unique_ptr<LinearSolver> m_linear;
   std::unique_ptr<LinearSolver> m_saddle;  // load steps' indefinite tangents (exact Newton steps)
+  bool m_saddle_analyzed = false;           // m_saddle has analysed the current pattern
   std::unique_ptr<Program> m_program;
   std::unique_ptr<ContactManager> m_contact;  // null without [contact]
   ContactStats m_contact_stats;
