@@ -220,6 +220,10 @@ IncrementMode TestDriver::mode(const SolverProgress& run, double step_dl) const 
 // within 0.2 %. The next level's loading increment is a lagged one again.
 int TestDriver::converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const {
   if (inc.step_dl > 0.0) host.set_test_drag(inc.drag);
+  return level_converged(run, host, inc);
+}
+
+int TestDriver::level_converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const {
   const int released = RelaxDriver::converged(run, host, inc);
   if (run.level_settled) run.relax_settling = false;
   return released;
@@ -303,8 +307,7 @@ int LoadDriver::converged(SolverProgress& run, StepHost& host, const SolvedIncre
     run.last_dl = inc.step_dl;
   }
   if (!held(run)) return 0;
-  const int released = RelaxDriver::converged(run, host, inc);
-  if (run.level_settled) run.relax_settling = false;  // the next level's loading is lagged
+  const int released = level_converged(run, host, inc);
   run.relax_drag = std::max(run.relax_drag, std::min(host.normal_feedback(), m_drag_max));
   return released;
 }

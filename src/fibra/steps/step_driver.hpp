@@ -202,6 +202,9 @@ class TestDriver : public RelaxDriver {
   double level_step(SolverProgress& run) const;
   /// A level's settling drag is the one its loading ended with, kept while the level settles.
   bool releases_creep() const override { return false; }
+  /// A level's increment converged: the relax's rules (RelaxDriver::converged), and once the
+  /// level settled, the next level's loading increment is a lagged one again.
+  int level_converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const;
 };
 
 /// Load steps (and any step without a drag): each increment predicted from the last one's
