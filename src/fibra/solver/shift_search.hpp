@@ -24,11 +24,13 @@ struct ShiftSearch {
 inline double first_shift(double last) { return std::max(1e-14, 1e-2 * last); }
 
 /// Factorizes `values` + beta I with beta = first_shift(last) mean_diag, then 100 times more
-/// each time it is refused, until a factor passes or beta reaches `mean_diag`.
+/// each time it is refused, until a factor passes or beta reaches `mean_diag` (within 1e-9 of
+/// it: 1e-14 times 100 seven times is the mean diagonal only up to round-off, which a compiler
+/// may leave on either side).
 inline ShiftSearch factorize_shifted(LinearSolver& solver, const std::vector<double>& values, double mean_diag,
                                      double last) {
   ShiftSearch s;
-  while (s.status == FactorStatus::NotPositiveDefinite && s.shift < mean_diag) {
+  while (s.status == FactorStatus::NotPositiveDefinite && s.shift < (1.0 - 1e-9) * mean_diag) {
     s.shift = s.shift == 0.0 ? first_shift(last) * mean_diag : s.shift * 100.0;
     s.status = solver.factorize(values, s.shift);
     ++s.factorizations;
