@@ -23,6 +23,7 @@
 
 #include "fibra/assembly/psd_projection.hpp"
 #include "fibra/body/bodies.hpp"
+#include "fibra/contact/contact_manager.hpp"
 #include "fibra/io/case_reader.hpp"
 #include "fibra/model/model.hpp"
 #include "fibra/solver/problem.hpp"
@@ -630,6 +631,66 @@ TEST(EnergyTerms, ContactStateIsSavedRestoredAndCommitted) {
   EXPECT_EQ(p.evaluate(x.q, nullptr, nullptr), energy);
   // Restored with the same element pairs: the pattern stays.
   EXPECT_FALSE(p.restore_lagged(saved));
+}
+
+// The fixed-point hooks (EnergyTerm::begin_fixed_point, update_fixed_point): the contact term's
+// cones take the normal force at the state they are given, its normals the contact manager's
+// update, and the change they report is how far both moved.
+TEST(EnergyTerms, ContactFixedPointIsItsNormalsAndCones) {
+  std::mt19937 rng(13);
+  Crossing x(rng, 1);
+  x.set_gap(0, -2e-6);
+  Problem p(x.model);
+  const ContactTerm& term = dynamic_cast<const ContactTerm&>(*p.terms()[1]);
+  ASSERT_TRUE(p.set_contacts(x.elements, x.friction));
+  // Without friction the cones stay as they are; without a normal rule, the normals.
+  FrictionParams frictionless = x.friction;
+  frictionless.mu = 0.0;
+  p.set_contacts(x.elements, frictionless);
+  p.begin_fixed_point(x.q);
+  EXPECT_EQ(term.contacts()[0].friction_normal, x.elements[0].friction_normal);
+  VecX moved = x.q;
+  moved.segment<3>(27) += 1e-4 * random_unit(rng);  // fiber "high"'s first node
+  FixedPointChange none = p.update_fixed_point(moved);
+  EXPECT_EQ(none.turn, 0.0);
+  EXPECT_EQ(none.relative, 0.0);
+  EXPECT_EQ(term.contacts()[0].normal, x.elements[0].normal);
+  // With friction: the cone takes the normal force at the state; pressed further, the change
+  // is the cone's over its new force.
+  p.set_contacts(x.elements, x.friction);
+  p.begin_fixed_point(x.q);
+  const double fn = p.contact_responses(x.q)[0].normal_force;
+  ASSERT_GT(fn, 0.0);
+  EXPECT_EQ(term.contacts()[0].friction_normal, fn);
+  moved = x.q;
+  for (int n = 3; n < 6; ++n) moved.segment<3>(9 * n) -= 1e-6 * x.elements[0].normal;  // fiber "high", deeper
+  const FixedPointChange pressed = p.update_fixed_point(moved);
+  const double fn_pressed = p.contact_responses(moved)[0].normal_force;
+  ASSERT_GT(fn_pressed, fn);
+  EXPECT_EQ(pressed.turn, 0.0);
+  EXPECT_EQ(term.contacts()[0].friction_normal, fn_pressed);
+  EXPECT_NEAR(pressed.relative, (fn_pressed - fn) / fn_pressed, 1e-15);
+  // With the manager's rule: the normals as ContactManager::update_normals turns them (from the
+  // fixture's random normal to the one between section centres), then the cones at the new
+  // normals.
+  ContactSpec spec = x.c.contact;
+  spec.enabled = true;
+  ContactManager manager(x.model, spec);
+  p.set_normal_rule(&manager);
+  std::vector<ContactElement> expected = term.contacts();
+  double idle = -1.0;
+  const double turn = manager.update_normals(expected, moved, &idle);
+  ASSERT_GT(std::max(turn, idle), spec.normal_tolerance);
+  const FixedPointChange change = p.update_fixed_point(moved);
+  EXPECT_EQ(change.turn, turn);
+  EXPECT_EQ(change.idle_turn, idle);
+  EXPECT_EQ(term.contacts()[0].normal, expected[0].normal);
+  EXPECT_NE(term.contacts()[0].normal, x.elements[0].normal);
+  EXPECT_EQ(term.contacts()[0].friction_normal, p.contact_responses(moved)[0].normal_force);
+  // At the fixed point nothing moves.
+  const FixedPointChange settled = p.update_fixed_point(moved);
+  EXPECT_LT(std::max(settled.turn, settled.idle_turn), 1e-7);  // (acos near 1)
+  EXPECT_EQ(settled.relative, 0.0);
 }
 
 TEST(EnergyTerms, ContactBoundsTheNewtonStep) {

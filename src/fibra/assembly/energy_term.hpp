@@ -30,6 +30,13 @@ struct LaggedTolerance {
   double force = 0;   ///< the force the minimization leaves unresolved (its tolerance times the reference force) [N]
 };
 
+/// How far an update of a term's fixed-point quantities moved them (EnergyTerm::update_fixed_point).
+struct FixedPointChange {
+  double turn = 0;       ///< largest turn of a lagged direction that carries force (a contact normal) [rad]
+  double idle_turn = 0;  ///< largest turn of one that carries none [rad]
+  double relative = 0;   ///< largest change of a lagged force, relative to the largest such force (a friction cone's normal force)
+};
+
 /// An energy term on the model's dofs (9 per node, then 6 per rigid body).
 class EnergyTerm {
  public:
@@ -67,6 +74,15 @@ class EnergyTerm {
     (void)q;
     (void)tolerance;
     return true;
+  }
+  /// Lagged quantities iterated to their fixed point around an increment's minimizations (the
+  /// contact's normals between section centres and its frozen friction cones): begin_fixed_point
+  /// takes them from q when the term's elements are new (a detection pass), update_fixed_point
+  /// after a minimization converged at q (update_lagged settled), returning how far they moved.
+  virtual void begin_fixed_point(const VecX& q) { (void)q; }
+  virtual FixedPointChange update_fixed_point(const VecX& q) {
+    (void)q;
+    return {};
   }
   /// The term's lagged state, to be put back by restore(); null for a term without one.
   virtual std::unique_ptr<LaggedState> save() const { return nullptr; }

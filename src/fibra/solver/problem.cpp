@@ -54,6 +54,21 @@ bool Problem::update_lagged(const VecX& q, const LaggedTolerance& tolerance) {
   return settled;
 }
 
+void Problem::begin_fixed_point(const VecX& q) {
+  for (EnergyTerm* t : m_terms) t->begin_fixed_point(q);
+}
+
+FixedPointChange Problem::update_fixed_point(const VecX& q) {
+  FixedPointChange all;
+  for (EnergyTerm* t : m_terms) {
+    const FixedPointChange c = t->update_fixed_point(q);
+    all.turn = std::max(all.turn, c.turn);
+    all.idle_turn = std::max(all.idle_turn, c.idle_turn);
+    all.relative = std::max(all.relative, c.relative);
+  }
+  return all;
+}
+
 LaggedStates Problem::save_lagged() const {
   LaggedStates s;
   for (const EnergyTerm* t : m_terms) s.terms.push_back(t->save());

@@ -70,6 +70,14 @@ class Problem {
   /// After a minimization converged at q, every term updates its unsettled lagged quantities
   /// (EnergyTerm::update_lagged); true when every term was settled.
   bool update_lagged(const VecX& q, const LaggedTolerance& tolerance);
+  /// A detection pass's new elements: every term takes its fixed-point quantities from q
+  /// (EnergyTerm::begin_fixed_point).
+  void begin_fixed_point(const VecX& q);
+  /// After the minimizations of a pass converged at q: every term updates its fixed-point
+  /// quantities (EnergyTerm::update_fixed_point); the largest change of each kind.
+  FixedPointChange update_fixed_point(const VecX& q);
+  /// The rule the contact term updates its normals with (ContactTerm::set_normal_rule).
+  void set_normal_rule(const ContactManager* manager) { m_contact.set_normal_rule(manager); }
   /// Every term's lagged state (EnergyTerm::save).
   LaggedStates save_lagged() const;
   /// Puts back what save_lagged() returned; true when the sparsity pattern changed with it (the

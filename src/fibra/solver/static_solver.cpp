@@ -14,6 +14,7 @@
 #include "fibra/core/error.hpp"
 #include "fibra/body/rotation.hpp"
 #include "fibra/model/fabric.hpp"
+#include "fibra/solver/contact_loop.hpp"
 #include "fibra/solver/krylov.hpp"
 #include "fibra/solver/shift_search.hpp"
 #include "fibra/steps/step_driver.hpp"
@@ -119,6 +120,8 @@ StaticSolver::StaticSolver(const Case& c, const Model& model, std::unique_ptr<Bo
     }
   if (c.contact.enabled) {
     m_contact = std::make_unique<ContactManager>(model, c.contact);
+    m_problem->set_normal_rule(m_contact.get());
+    m_contact_loop = std::make_unique<ContactLoop>(model, *m_contact, *m_problem);
     double rmin = std::numeric_limits<double>::infinity();
     for (const Fiber& f : model.fibers)
       rmin = std::min(rmin, std::sqrt(model.sections[f.section].a * model.sections[f.section].b));
@@ -201,285 +204,64 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
                       weave || (relax && !m_mode.held) ? m_case.solver.method.drag_axial : 1.0,
                       positions_released ? 0.0 : 1.0);
 
-  // METHOD §4: (1) contact elements, repeated while the set changes; (2) normals, repeated
-  // while they turn; (3) Newton on the rest. A zone that penetrates too deep gets a stiffer
-  // penalty and the loops go on from the current state.
-  const ContactSpec& spec = m_contact->spec();
-  int total_iterations = 0;
-  auto detect = [&]() {
-    const auto t0 = std::chrono::steady_clock::now();
-    std::vector<ContactElement> fresh = m_contact->detect(m_q, m_q_start, m_problem->contacts());
-    if (weave) {
-      // METHOD §6: contacts between crossing tows pushed to the pattern's side; the
-      // penetration found at the start of the step is released linearly.
-      auto rule = [this](int fa, int fb) { return weave_side(fa, fb); };
-      const double deepest = m_contact->prescribe_normals(fresh, m_q, Vec3::UnitZ(), rule, 0.0);
-      if (m_run.weave_depth < 0.0) m_run.weave_depth = deepest;
-      // Released over the first half of the step; the second half settles.
-      const double offset = std::max(0.0, 1.0 - 2.0 * lambda) * m_run.weave_depth;
-      for (ContactElement& c : fresh)
-        if (c.prescribed) c.offset = offset;
+  // Pseudo-time increments (weave and relax steps) do not iterate the normals and cones to
+  // their fixed point: one solve, then both are updated for the next increment (a lag like
+  // the drag's). Once a relax step's drag force is negligible, its increments iterate them
+  // (a slow creep would turn the normals a little at every lagged increment); the step ends
+  // at an increment where they did not move.
+  const bool lagged = weave || (relax && !m_run.relax_settling);
+  // A lagged increment is a pseudo-time state, not an equilibrium: its drag force is above
+  // the step's tolerance, so its Newton solves stop at the looser method.pseudo_tolerance
+  // (and the correction at the displacement tolerance scaled alike).
+  m_newton_tolerance = lagged ? std::max(m_case.solver.method.pseudo_tolerance, m_case.solver.residual_tolerance)
+                              : m_case.solver.residual_tolerance;
+  // Tests (biaxial, shear) with a drag: each solve only as exact as the state it is part of.
+  // A lagged increment is a step of a proximal-point sequence whose drag force, relative to
+  // the reference force, was 0.19, 0.13, 0.028, 0.0082, ... on the 480-fiber equibiaxial
+  // test: a Newton residual a hundredth of the drag force the increment is expected to leave
+  // (the last increment's, or the last level's loading increment's for a level's first)
+  // changes nothing of the sequence, where 1e-6 took 6-14 iterations per solve
+  // (method.test_inexact).
+  // The bindings' tolerance (a length) is scaled alike: the proximal anchors' springs are
+  // reset whenever a member moved more than it, and a solve that stops at the first iteration
+  // moves nothing, so with the length left as it was the multipliers grew by one update at a
+  // time, each solve stopping at once, until max_binding_updates failed the increment.
+  // A settling increment of a test level (drag force below the step's tolerance) ends once
+  // the residual with its updated normals and cones is below that tolerance; its Newton
+  // solves stop at a hundredth of it (method.test_inexact x the step's tolerance): on the
+  // 480-fiber equibiaxial test they went on to residual_tolerance, 7-8 iterations and 2-3
+  // more after a binding update per pass, where the last 2-4 changed the edge forces by less
+  // than 1e-5 of the reference force (docs/performance.md, "Test levels").
+  m_tolerance_scale = 1.0;
+  const bool test_with_drag = m_mode.test && m_mode.drag > 0.0;
+  if (test_with_drag) {
+    const double expected = !lagged ? m_mode.tolerance : m_mode.loading ? m_run.load_residual : m_run.relax_residual;
+    const double loose = m_case.solver.method.test_inexact * expected;
+    if (loose > m_newton_tolerance) {
+      m_tolerance_scale = loose / m_newton_tolerance;
+      m_newton_tolerance = loose;
     }
-    ++m_contact_stats.detections;
-    m_contact_stats.detection_time += seconds_since(t0);
-    return fresh;
-  };
-  // Weave steps are frictionless: their motion (fibers pushed through their crossing partners
-  // along prescribed normals) is a pseudo-process, not a physical slip; friction acts from the
-  // relax step on.
-  FrictionParams friction = m_contact->friction();
-  if (weave) friction.mu = 0.0;
-  std::vector<ContactElement> contacts = detect();
-  // The residual with the last updated normals, over the increment's detection passes: a
-  // settling increment whose normals stop converging (below) ends at its pass's detection. A
-  // fresh pass with the freshly detected elements used to start this measure afresh, so such
-  // an increment went on through all its detection passes (a 480-fiber shear level spent
-  // 21 minutes so, the element count alternating between 54 095 and 54 130) and then failed.
-  double last_moved = std::numeric_limits<double>::infinity();
-  m_settling_moved = -1.0;
-  bool stalled_increment = false;
-  for (int d = 0; d < spec.max_detections; ++d) {
-    if (m_problem->set_contacts(std::move(contacts), friction)) pattern_changed();
-    bool normals_settled = false;
-    // Friction: the normal force that sets each element's cone is frozen for a Newton solve
-    // and updated with the normals (a fixed point, like them): within the solve the friction
-    // potential is then convex in the slip and its Hessian exact and symmetric.
-    const bool freeze = friction.mu > 0.0;
-    auto freeze_cones = [&]() {
-      double change = 0.0, largest = 0.0;
-      const std::vector<ContactResponse> now = m_problem->contact_responses(m_q);
-      std::vector<ContactElement>& elements = m_problem->contacts();
-      for (size_t e = 0; e < elements.size(); ++e) {
-        const double before = std::max(0.0, elements[e].friction_normal);
-        change = std::max(change, std::abs(now[e].normal_force - before));
-        largest = std::max(largest, now[e].normal_force);
-        elements[e].friction_normal = now[e].normal_force;
-      }
-      return largest > 0.0 ? change / largest : 0.0;
-    };
-    if (freeze) freeze_cones();
-    // Pseudo-time increments (weave and relax steps) do not iterate the normals and cones to
-    // their fixed point: one solve, then both are updated for the next increment (a lag like
-    // the drag's). Once a relax step's drag force is negligible, its increments iterate them
-    // (a slow creep would turn the normals a little at every lagged increment); the step ends
-    // at an increment where they did not move.
-    const bool lagged = weave || (relax && !m_run.relax_settling);
-    // A lagged increment is a pseudo-time state, not an equilibrium: its drag force is above
-    // the step's tolerance, so its Newton solves stop at the looser method.pseudo_tolerance
-    // (and the correction at the displacement tolerance scaled alike).
-    m_newton_tolerance = lagged ? std::max(m_case.solver.method.pseudo_tolerance, m_case.solver.residual_tolerance)
-                                : m_case.solver.residual_tolerance;
-    // Tests (biaxial, shear) with a drag: each solve only as exact as the state it is part of.
-    // A lagged increment is a step of a proximal-point sequence whose drag force, relative to
-    // the reference force, was 0.19, 0.13, 0.028, 0.0082, ... on the 480-fiber equibiaxial
-    // test: a Newton residual a hundredth of the drag force the increment is expected to leave
-    // (the last increment's, or the last level's loading increment's for a level's first)
-    // changes nothing of the sequence, where 1e-6 took 6-14 iterations per solve
-    // (method.test_inexact).
-    // The bindings' tolerance (a length) is scaled alike: the proximal anchors' springs are
-    // reset whenever a member moved more than it, and a solve that stops at the first iteration
-    // moves nothing, so with the length left as it was the multipliers grew by one update at a
-    // time, each solve stopping at once, until max_binding_updates failed the increment.
-    // A settling increment of a test level (drag force below the step's tolerance) ends once
-    // the residual with its updated normals and cones is below that tolerance; its Newton
-    // solves stop at a hundredth of it (method.test_inexact x the step's tolerance): on the
-    // 480-fiber equibiaxial test they went on to residual_tolerance, 7-8 iterations and 2-3
-    // more after a binding update per pass, where the last 2-4 changed the edge forces by less
-    // than 1e-5 of the reference force (docs/performance.md, "Test levels").
-    m_tolerance_scale = 1.0;
-    const bool test_with_drag = m_mode.test && m_mode.drag > 0.0;
-    if (test_with_drag) {
-      const double expected = !lagged ? m_mode.tolerance : m_mode.loading ? m_run.load_residual : m_run.relax_residual;
-      const double loose = m_case.solver.method.test_inexact * expected;
-      if (loose > m_newton_tolerance) {
-        m_tolerance_scale = loose / m_newton_tolerance;
-        m_newton_tolerance = loose;
-      }
-    }
-    for (int k = 0; k < spec.max_normal_updates; ++k) {
-      int its = 0;
-      if (!equilibrium(history, its, residual)) {
-        iterations = total_iterations + its;
-        return false;
-      }
-      total_iterations += its;
-      ++m_contact_stats.normal_updates;
-      double idle_turn = 0.0;
-      const double turn = m_contact->update_normals(m_problem->contacts(), m_q, &idle_turn);
-      const double cone_change = freeze ? freeze_cones() : 0.0;
-      if (debug_newton())
-        fmt::print(stderr, " normals turned {:.3e} rad ({:.3e} where no force), friction cones changed {:.3e}, {} elements\n",
-                   turn, idle_turn, cone_change, m_problem->contacts().size());
-      m_run.normals_settled = turn < spec.normal_tolerance && cone_change <= spec.normal_tolerance;
-      // Relax and test increments that iterate the normals (drag force below the step's
-      // tolerance): the state is an equilibrium to that tolerance once the residual with the
-      // updated normals and cones is below it too (the same measure as the drag's force). On
-      // the 480-fiber fabric the largest turn and cone change hover at 1e-2 and 1e-1 through
-      // dozens of normal updates (elements at crossings sliding, cones of weakly loaded
-      // elements) while the force they move is 1e-4 of the reference force or less
-      // (docs/theory/contact.md, "The solver's loops").
-      bool stalled = false;
-      if (!m_run.normals_settled && relax && !lagged) {
-        const double moved = normal_update_residual();
-        if (debug_newton()) fmt::print(stderr, " residual with the new normals and cones {:.3e}\n", moved);
-        m_settling_moved = moved;
-        m_run.normals_settled = moved <= m_mode.tolerance;
-        stalled = moved > 0.5 * last_moved;
-        last_moved = moved;
-      }
-      if (m_run.normals_settled || lagged) {
-        normals_settled = true;
-        break;
-      }
-      // Not settling (the residual with the new normals did not at least halve): the increment
-      // ends here all the same (an equilibrium with the drag and these normals), the level or
-      // the relax goes on with another increment, and that one detects afresh. Under load the fibers slide at the crossings by several microns while
-      // the drag's force falls (the drag is then tens of N/m): the particles of an element,
-      // facing each other when it was detected, no longer do, and its normal between their
-      // section centres turns by up to 0.1 rad whatever the solve does. Iterating the normals
-      // of such stale pairs did not converge on the 480-fiber biaxial test (residuals 5e-3,
-      // 3e-3, 3e-3, 2e-2 with the new normals); fresh pairs at each solve did (5e-3 to 6e-5).
-      if (relax && stalled) {
-        normals_settled = true;
-        stalled_increment = true;
-        break;
-      }
-    }
-    iterations = total_iterations;
-    if (!normals_settled) {
-      m_refusal = fmt::format("the contact normals did not settle within contact.max_normal_updates ({}) updates",
-                              spec.max_normal_updates);
-      return false;
-    }
-    const std::vector<ContactResponse> responses = m_problem->contact_responses(m_q);
-    const int raised = m_contact->adapt_penalty(m_problem->contacts(), responses);
-    m_contact_stats.penalty_raises += raised;
-    // Detect again at the converged state: done when nothing new appears and the fresh
-    // elements (particles facing each other at this state) see no penetration beyond the cap;
-    // otherwise the loops go on with the fresh elements.
-    contacts = detect();
-    // Consistent: no new element would carry force (the new ones do not penetrate) and the
-    // fresh set sees no penetration beyond the cap.
-    // Pseudo-time increments (weaving, and relax and test increments whose drag force is
-    // still above the tolerance) let fresh elements that penetrate, and penetrations of up to
-    // twice the cap, wait for the next increment, as they let the penalties they raised wait
-    // (those act from the next increment) and the normals; such an increment does not end its
-    // step or level (a relax step ends only once nothing is raised any more), and the
-    // increments that do take everything in. On the 480-fiber biaxial test loading increments
-    // went through all their detection passes and failed twice (160-200 s), the set
-    // alternating between 54 272 and 54 300 elements as a fiber slid across a crossing, or an
-    // element pressed just beyond the cap, its penalty raised at every pass.
-    bool fresh_penetrate = false;
-    for (size_t k = 0; !weave && !fresh_penetrate && k < contacts.size(); ++k)
-      fresh_penetrate = contacts[k].fresh && !(m_contact->penetration_ratio({contacts[k]}, m_q) <= 0.0);
-    const double deepest = weave ? 0.0 : m_contact->penetration_ratio(contacts, m_q);
-    const double current_deepest = weave ? 0.0 : m_contact->penetration_ratio(m_problem->contacts(), m_q);
-    if (lagged && (fresh_penetrate || deepest > 1.0 || raised > 0)) m_run.normals_settled = false;
-    // A test level's settling increment: its state is a point of the curves once the fresh
-    // elements do not penetrate and the deepest penetration is within method.test_penetration_slack
-    // of the cap; the penalties raised at this pass act from the next increment, as in a
-    // lagged one. Holding the cap exactly took up to 6 more passes per level on the 480-fiber
-    // equibiaxial test (deepest 1.013, 1.028, 1.102, 1.003, 1.003, 1.000 of the cap, one to six
-    // zones raised at each; 36 Newton iterations, 200 s), each pass a solve to the tolerance
-    // for a few zones' penetration of a few tenths of a percent of the cap.
-    const bool test_settling = test_with_drag && !lagged;
-    const double cap = lagged ? 2.0 : test_settling ? 1.0 + m_case.solver.method.test_penetration_slack : 1.0;
-    const bool same = weave || ((lagged || !fresh_penetrate) && deepest <= cap);
-    const bool deferred = lagged || (test_settling && m_case.solver.method.test_penetration_slack > 0.0);
-    if (debug_newton() && !weave) {
-      size_t fresh = 0;
-      for (const ContactElement& c : contacts) fresh += c.fresh ? 1 : 0;
-      fmt::print(stderr, " detection: {} elements ({} fresh{}), deepest {:.3f} of the cap ({:.3f} in the solved set), {} penalties raised{}\n",
-                 contacts.size(), fresh, fresh_penetrate ? ", some penetrating" : "", deepest, current_deepest, raised,
-                 same && (raised == 0 || deferred) ? "" : ": another pass");
-      if (!same) {
-        // Where: the deepest element of the fresh detection (fibers, their elements, position).
-        size_t worst = 0;
-        double worst_ratio = -1.0;
-        for (size_t k = 0; k < contacts.size(); ++k) {
-          const double r = m_contact->penetration_ratio({contacts[k]}, m_q);
-          if (r > worst_ratio) worst_ratio = r, worst = k;
-        }
-        auto where = [this](Index element) {
-          const Fiber& f = m_model.fibers[m_model.elements[element].fiber];
-          return fmt::format("{} element {}", f.name, element - f.first_element);
-        };
-        if (worst_ratio > 0.0) {
-          const ContactElement& c = contacts[worst];
-          const Vec3 x = m_q.segment<3>(m_model.elements[c.a.element].first_dof + kNodeDofs);
-          fmt::print(stderr, "  deepest: {} and {} ({}zone {}, {:.3f} of the cap) near ({:.4e}, {:.4e}, {:.4e}) m\n",
-                     where(c.a.element), where(c.b.element), c.fresh ? "fresh, " : "", c.zone, worst_ratio, x.x(), x.y(),
-                     x.z());
-        }
-      }
-    }
-    // A stalled increment ends here whatever the detection found (m_run.normals_settled is false:
-    // the level or the relax goes on with an increment that starts from this detection).
-    if ((same && (raised == 0 || deferred)) || stalled_increment) {
-      // Fibers that went through each other within the increment: cut it (not while
-      // weaving, where crossing tows pass through each other by design).
-      std::pair<Index, Index> pair;
-      if (!weave && m_contact->crossed(m_q_start, m_q, &pair)) {
-        m_refusal = fmt::format("{} and {} passed through each other within the increment (the swept check)",
-                                element_name(pair.first), element_name(pair.second));
-        return false;
-      }
-      // Nothing changed since `responses` (same state, elements, normals and penalties).
-      m_contact->add_stats(m_problem->contacts(), responses, m_contact_stats);
-      m_problem->set_contact_solution(responses);
-      // Pseudo-time increments of relax and test steps also soften the zones that penetrate
-      // far less than allowed: the weave leaves penalties raised up to ~100 k0 to push the tows
-      // through each other (median 30 k0 on the 3 x 3 x 16 bench case), 30 times stiffer than
-      // the settled fabric needs, and such stiff contacts make every Newton solve of the relax
-      // harder (docs/theory/contact.md, "Softening"). Softened zones stay above the initial
-      // penalty; like the raises, the change acts from the next increment.
-      if (lagged && !weave)
-        m_contact_stats.penalty_softenings +=
-            m_contact->soften_penalty(m_problem->contacts(), responses, m_contact->initial_stiffness());
-      return true;
-    }
-    // Penalties raised and no fresh element that penetrates: keep the current elements (with
-    // their raised penalties) and solve again. Fresh elements that penetrate go in with the
-    // raises (the detection carries each zone's raised penalty over): kept out while some zone
-    // was raised at every pass, ten fresh elements 4.9 times the cap deep were never taken in
-    // on the 480-fiber biaxial test at alpha = 0.5, every pass found them again, and the level
-    // failed after 12 cuts (docs/performance.md, "Test levels").
-    // Nor when the detection sees a penetration deeper than any of the current elements: a
-    // zone laid out afresh can hold an element where the current ones are not (matched to
-    // one of them, so not fresh); kept out, its penetration was never resisted: on the
-    // 480-fiber twill's last shear level one stayed at 2.43-2.50 times the cap through six
-    // passes of raises, and the loading failed (docs/performance.md, "Test levels").
-    if (raised > 0 && !fresh_penetrate && !(deepest > 1.0 && deepest > 1.01 * current_deepest)) {
-      contacts = m_problem->contacts();
-      continue;
-    }
-    // New elements: refuse those that start deep inside another fiber (a crossing missed
-    // between two detections); the increment is cut.
-    if (m_problem->set_contacts(contacts, friction)) pattern_changed();
-    const std::vector<ContactResponse> fresh_responses = m_problem->contact_responses(m_q);
-    std::pair<Index, Index> through;
-    if (!weave && m_contact->passed_through(m_problem->contacts(), fresh_responses, &through)) {
-      m_refusal = fmt::format("a new contact element finds {} and {} through each other", element_name(through.first),
-                              element_name(through.second));
-      return false;
-    }
-    // In steps without a drag: the fresh elements penetrate beyond the cap where the solved
-    // ones did not, and nothing was raised (the fresh particles lie between the solved ones).
-    // Their zones get their stiffer penalty now: solved again with the same penalty, the
-    // passes alternated between two layouts, each within the cap where the other was not (an
-    // overhand knot tightened, element pairs 12/42 and 17/47, until max_detections: 12 cuts).
-    if (!weave && m_problem->drag() == 0.0 && raised == 0 && deepest > 1.0 && current_deepest <= 1.0)
-      m_contact_stats.penalty_raises += m_contact->adapt_penalty(m_problem->contacts(), fresh_responses);
-    contacts = m_problem->contacts();
   }
-  m_refusal = fmt::format("the contact detection did not settle within contact.max_detections ({}) passes",
-                          spec.max_detections);
-  return false;
-}
 
-std::string StaticSolver::element_name(Index element) const {
-  const Fiber& f = m_model.fibers[m_model.elements[element].fiber];
-  return fmt::format("fiber \"{}\" (element {})", f.name, element - f.first_element);
+  // The contact loops (solver/contact_loop.hpp): detection passes, the normals and cones to
+  // their fixed point, the penalties; each minimization is equilibrium().
+  ContactLoopRules rules;
+  rules.weave = weave;
+  rules.weave_side = [this](int fa, int fb) { return weave_side(fa, fb); };
+  rules.relax = relax;
+  rules.lagged = lagged;
+  rules.test_settling = test_with_drag && !lagged;
+  rules.penetration_slack = m_case.solver.method.test_penetration_slack;
+  rules.tolerance = m_mode.tolerance;
+  rules.lambda = lambda;
+  ContactLoopHost host;
+  host.minimize = [this](std::vector<double>& h, int& its, double& res) { return equilibrium(h, its, res); };
+  host.pattern_changed = [this]() { pattern_changed(); };
+  host.moved_residual = [this]() { return normal_update_residual(); };
+  const bool ok = m_contact_loop->solve(rules, host, m_q, m_q_start, history, iterations, residual, m_contact_stats,
+                                        m_run, m_refusal);
+  m_settling_moved = m_contact_loop->settling_moved();
+  return ok;
 }
 
 double StaticSolver::normal_update_residual() {

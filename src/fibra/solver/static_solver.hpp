@@ -12,6 +12,7 @@
 #include "fibra/contact/contact_manager.hpp"
 #include "fibra/model/case.hpp"
 #include "fibra/model/model.hpp"
+#include "fibra/solver/contact_loop.hpp"
 #include "fibra/solver/krylov.hpp"
 #include "fibra/solver/linear_solver.hpp"
 #include "fibra/solver/problem.hpp"
@@ -127,8 +128,8 @@ class StaticSolver {
   struct Program;  // resolved loads and displacements per step
   /// A step's loads and prescribed values (m_program) from the case and the current state.
   void begin_step(int step);
-  /// Solves the increment to load factor `lambda` of step `step` (contact loops, Newton,
-  /// bindings). `positions_released`: its drag holds only the section vectors
+  /// Solves the increment to load factor `lambda` of step `step` (the contact loops,
+  /// solver/contact_loop.hpp, around equilibrium()). `positions_released`: its drag holds only the section vectors
   /// (release_positions).
   bool solve_increment(int step, double lambda, std::vector<double>& history, int& iterations, double& residual,
                        bool positions_released = false);
@@ -158,8 +159,6 @@ class StaticSolver {
   /// m_hessian, maybe shifted), scaled to unit length in weighed coordinates (every dof a
   /// length, see m_length_scale); returns its stiffness v.Hv [N/m]. `mode` is in the dofs' units.
   double softest_mode(int iterations, VecX& mode);
-  /// A beam element as a user finds it: its fiber's name and its index along the fiber.
-  std::string element_name(Index element) const;
   /// Weaving: +1 / -1 when the contact normal from fiber fa towards fiber fb must be +z / -z
   /// (fibers of crossing tows, side from the weave matrix), 0 otherwise.
   int weave_side(int fa, int fb) const;
@@ -195,6 +194,7 @@ class StaticSolver {
   bool m_saddle_analyzed = false;           // m_saddle has analysed the current pattern
   std::unique_ptr<Program> m_program;
   std::unique_ptr<ContactManager> m_contact;  // null without [contact]
+  std::unique_ptr<ContactLoop> m_contact_loop;  // the contact loops of an increment (null without [contact])
   ContactStats m_contact_stats;
   VecX m_q;
   VecX m_q_start;  // state at the start of the current increment (friction slips, crossings)

@@ -76,6 +76,29 @@ void ContactTerm::commit(VecX& q) {
   }
 }
 
+double ContactTerm::freeze_cones(const VecX& q) {
+  double change = 0.0, largest = 0.0;
+  const std::vector<ContactResponse> now = responses(q);
+  for (size_t e = 0; e < m_contacts.size(); ++e) {
+    const double before = std::max(0.0, m_contacts[e].friction_normal);
+    change = std::max(change, std::abs(now[e].normal_force - before));
+    largest = std::max(largest, now[e].normal_force);
+    m_contacts[e].friction_normal = now[e].normal_force;
+  }
+  return largest > 0.0 ? change / largest : 0.0;
+}
+
+void ContactTerm::begin_fixed_point(const VecX& q) {
+  if (m_friction.mu > 0.0) freeze_cones(q);
+}
+
+FixedPointChange ContactTerm::update_fixed_point(const VecX& q) {
+  FixedPointChange change;
+  if (m_manager) change.turn = m_manager->update_normals(m_contacts, q, &change.idle_turn);
+  if (m_friction.mu > 0.0) change.relative = freeze_cones(q);
+  return change;
+}
+
 double ContactTerm::step_bound(const VecX& q, const VecX& dq) const {
   (void)q;
   if (!(m_max_move > 0.0)) return 1.0;

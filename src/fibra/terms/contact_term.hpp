@@ -3,13 +3,16 @@
 /// energy (docs/theory/contact.md), kernels on the 6-node stencil of an element pair, summed
 /// pair by pair. The elements (normals, laws, friction history) are lagged: they change only
 /// between minimizations (set_contacts), and an increment's end commits their friction history
-/// from the responses of its solution (set_solution). The term also bounds a Newton step: no
+/// from the responses of its solution (set_solution). Around an increment's minimizations the
+/// normals and the friction cones' normal forces are iterated to their fixed point
+/// (update_fixed_point). The term also bounds a Newton step: no
 /// point moves further than the step limit, so that a fiber nothing holds yet does not jump
 /// through its neighbours.
 #include <vector>
 
 #include "fibra/assembly/energy_term.hpp"
 #include "fibra/contact/contact_element.hpp"
+#include "fibra/contact/contact_manager.hpp"
 #include "fibra/model/model.hpp"
 
 namespace fibra {
@@ -47,6 +50,17 @@ class ContactTerm final : public EnergyTerm {
     m_length_scale = std::move(length_scale);
   }
 
+  /// The rule that updates the normals (ContactManager::update_normals; kept by reference):
+  /// without one, update_fixed_point leaves them.
+  void set_normal_rule(const ContactManager* manager) { m_manager = manager; }
+  /// With friction (mu > 0): each element's friction cone takes its normal force at q
+  /// (ContactElement::friction_normal, frozen through the next minimizations).
+  void begin_fixed_point(const VecX& q) override;
+  /// The normals (ContactManager::update_normals), then, with friction, the cones at q; returns
+  /// the largest turn with and without force and the cones' largest change relative to the
+  /// largest normal force.
+  FixedPointChange update_fixed_point(const VecX& q) override;
+
   /// The elements, the friction parameters and the solution's responses.
   std::unique_ptr<LaggedState> save() const override;
   bool restore(const LaggedState& state) override;
@@ -56,7 +70,10 @@ class ContactTerm final : public EnergyTerm {
   double step_bound(const VecX& q, const VecX& dq) const override;
 
  private:
+  /// Each cone's normal force at q; returns the largest change relative to the largest force.
+  double freeze_cones(const VecX& q);
   const Model& m_model;
+  const ContactManager* m_manager = nullptr;
   StencilSet m_pairs;               // one stencil per element pair in contact (6 nodes)
   std::vector<Index> m_pair_begin;  // contacts of pair s: [m_pair_begin[s], m_pair_begin[s+1])
   std::vector<ContactElement> m_contacts;
