@@ -424,6 +424,46 @@ dofs = ["x", "y", "g1z"]
     for (const auto& p : xf) std::printf("   x %.5f mm  fn %.6g N\n", 1e3 * p.first, p.second);
 }
 
+// A held load step's stability (IncrementInfo::negative_pivots, history.csv's
+// stability:negative_pivots): the three-point bending of the robustness corpus, pushed in one
+// increment whose Newton solve may take 4 iterations (it needs 9), fails it and is held (each
+// level applied with a drag, repeated until the drag's force is negligible). An increment
+// whose level settled is an equilibrium without the drag, and reports the negative pivots of
+// its tangent without it: with friction 0.3 none (0: friction holds the beam, as the same case
+// unheld reports); frictionless, the beam slides and spins freely on its supports, a mechanism
+// whose tangent is singular: unknown (-1). The increments before a level settled report -1.
+TEST(ContactThreePointBending, AHeldStepReportsItsSettledStabilityWithoutTheDrag) {
+  std::ifstream in(std::string(FIBRA_SOURCE_DIR) + "/tests/robustness/cases/three_point_bending_mu0_unheld.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  for (const double mu : {0.3, 0.0}) {
+    std::string toml = text.str();
+    const size_t contact = toml.find("[contact]\n");
+    ASSERT_NE(contact, std::string::npos);
+    toml.insert(contact + 10, fmt::format("friction = {}\n", mu));
+    const size_t increments = toml.find("increments = 4");
+    ASSERT_NE(increments, std::string::npos);
+    toml.replace(increments, 14, "increments = 1");
+    toml += "\n[solver]\nmax_iterations = 4\n";
+    const Case c = parse_case_toml(toml, "held.toml");
+    ResolvedCase r = resolve_case(c);
+    StaticSolver solver(c, r.model, std::move(r.bodies));
+    std::vector<IncrementInfo> seen;
+    const RunResult result = solver.run([&](const IncrementInfo& info, const VecX&) { seen.push_back(info); });
+    ASSERT_EQ(result.status, RunResult::Status::Converged) << "mu " << mu << ": " << result.message;
+    ASSERT_GE(seen.size(), 2u) << "mu " << mu;
+    EXPECT_GT(seen.front().drag, 0.0) << "mu " << mu << ": held from its first increment";
+    int settled = 0;
+    for (const IncrementInfo& info : seen) {
+      settled += info.settled;
+      EXPECT_EQ(info.negative_pivots, info.settled && mu > 0.0 ? 0 : -1)
+          << "mu " << mu << ", increment " << info.increment << (info.settled ? " (settled)" : "");
+    }
+    EXPECT_GE(settled, 1) << "mu " << mu;
+    EXPECT_TRUE(seen.back().settled) << "mu " << mu;
+  }
+}
+
 // 3. Three-point bending (the case is examples/three_point_bending): a fiber (r = 0.5 mm, 40
 // elements) resting on two stiff perpendicular support fibers 40 mm apart, pushed at mid-span by
 // a third one (prescribed displacement of its clamped ends: 0.04 mm, then 0.08 mm). The beam is

@@ -103,6 +103,7 @@ class Problem {
   double drag() const { return m_drag.stiffness(); }            ///< drag stiffness per node [N/m]
   double drag_director_weight() const { return m_drag.director_weight(); }  ///< set_drag's director_weight
   double drag_axial_weight() const { return m_drag.axial_weight(); }        ///< set_drag's axial_weight
+  double drag_position_weight() const { return m_drag.position_weight(); }  ///< set_drag's position_weight
   const FrictionParams& friction() const { return m_contact.friction(); }   ///< set_contacts' friction
   /// P u for node `node`'s position (the drag's force per unit stiffness, see DragTerm::set).
   Vec3 drag_projected(Index node, const Vec3& u) const { return m_drag.projected(node, u); }

@@ -424,16 +424,25 @@ bool StaticSolver::factorize_indefinite() {
 }
 
 int StaticSolver::tangent_negative_pivots() {
+  // A held load step's settled increment is an equilibrium without its drag (its force below
+  // the held tolerance of the load): its stability is that of the tangent without the drag,
+  // whose factor then preconditions nothing (the next increment's tangent holds the drag).
+  const double drag = m_problem->drag();
+  const VecX anchor = drag > 0.0 ? m_problem->drag_anchor() : VecX();
+  const double director = m_problem->drag_director_weight(), axial = m_problem->drag_axial_weight(),
+               position = m_problem->drag_position_weight();
+  if (drag > 0.0) m_problem->set_drag(0.0, anchor, director, axial, position);
   m_problem->evaluate(m_q, nullptr, &m_hessian);
   const auto t0 = std::chrono::steady_clock::now();
   ++m_stats.factorizations;
   const bool definite = m_linear->factorize(m_hessian, 0.0) == FactorStatus::Ok;
   begin_factor();
-  m_reuse_factor = definite;
-  if (definite) record_factor_source(0.0);
+  m_reuse_factor = definite && drag == 0.0;
+  if (m_reuse_factor) record_factor_source(0.0);
   else m_factor_source.valid = false;
   const int negative = definite ? 0 : factorize_indefinite() ? static_cast<int>(m_saddle->negative_pivots()) : -1;
   m_stats.time_factorization += seconds_since(t0);
+  if (drag > 0.0) m_problem->set_drag(drag, anchor, director, axial, position);
   return negative;
 }
 
@@ -1197,10 +1206,10 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       info.spin_residual = proximal ? drag_residual(DragPart::Sections) : 0.0;
       info.drag = solved.drag;
       // A load step's equilibrium: its stability, from the exact tangent at the accepted state
-      // (its factor then preconditions the next increment). A held step's tangent holds the
-      // drag: unknown (-1).
+      // (its factor then preconditions the next increment). A held step's increment is one
+      // once its level settled (tangent_negative_pivots: without the drag); before, unknown (-1).
       if (st.kind == StepSpec::Kind::Standard)
-        info.negative_pivots = m_problem->drag() == 0.0 ? tangent_negative_pivots() : -1;
+        info.negative_pivots = m_problem->drag() == 0.0 || m_run.level_settled ? tangent_negative_pivots() : -1;
       info.reactions = reactions(m_gradient);
       if (m_bodies) {
         info.binding_updates = m_binding_updates;

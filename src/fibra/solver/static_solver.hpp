@@ -54,8 +54,9 @@ struct IncrementInfo {
   double spin_residual = 0;
   double drag = 0;                ///< drag stiffness per node the increment was solved with [N/m] (0 without drag)
   /// Load steps: negative pivots of the tangent at the accepted state (LDL^T), the unstable
-  /// modes of the equilibrium: 0 for a stable one, -1 when unknown (a singular tangent, or a
-  /// held step's, solved with a drag); 0 in other steps.
+  /// modes of the equilibrium (a held step's without its drag): 0 for a stable one, -1 when
+  /// unknown (a singular tangent, or a held step's increment before its level settled); 0 in
+  /// other steps.
   int negative_pivots = 0;
 };
 
@@ -141,8 +142,9 @@ class StaticSolver {
   /// Factorizes m_hessian as it is (LDL^T, m_saddle, made on first use; its ordering computed
   /// once per pattern); false when singular.
   bool factorize_indefinite();
-  /// Negative pivots of the exact tangent at the current state (LDL^T); -1 when it is singular.
-  /// Its factor, when positive definite, preconditions the next Newton solves.
+  /// Negative pivots of the exact tangent at the current state (LDL^T), without the drag of a
+  /// held load step; -1 when it is singular. Its factor, when positive definite and without a
+  /// drag to leave out, preconditions the next Newton solves.
   int tangent_negative_pivots();
   bool newton(std::vector<double>& history, int& iterations, double& residual);
   /// Developers' trace of a shifted factorization (FIBRA_DEBUG_NEWTON): the indefinite local
