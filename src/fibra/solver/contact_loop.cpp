@@ -1,10 +1,10 @@
 #include "fibra/solver/contact_loop.hpp"
 
+#include <fmt/format.h>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <fmt/format.h>
 
 #include "fibra/core/debug.hpp"
 
@@ -20,8 +20,8 @@ bool ContactLoop::solve(const ContactLoopRules& rules, const ContactLoopHost& ho
                         SolverProgress& run, std::string& refusal) {
   const bool weave = rules.weave, relax = rules.relax, lagged = rules.lagged, test_settling = rules.test_settling;
   // METHOD §4: (1) contact elements, repeated while the set changes; (2) normals and cones
-  // (the terms' fixed point), repeated while they move; (3) Newton on the rest. A zone that penetrates too deep gets a stiffer
-  // penalty and the loops go on from the current state.
+  // (the terms' fixed point), repeated while they move; (3) Newton on the rest. A zone that penetrates too deep gets a
+  // stiffer penalty and the loops go on from the current state.
   const ContactSpec& spec = m_manager.spec();
   int total_iterations = 0;
   auto detect = [&]() {
@@ -73,7 +73,8 @@ bool ContactLoop::solve(const ContactLoopRules& rules, const ContactLoopHost& ho
       ++stats.normal_updates;
       const FixedPointChange change = m_problem.update_fixed_point(q);
       if (debug_newton())
-        fmt::print(stderr, " normals turned {:.3e} rad ({:.3e} where no force), friction cones changed {:.3e}, {} elements\n",
+        fmt::print(stderr,
+                   " normals turned {:.3e} rad ({:.3e} where no force), friction cones changed {:.3e}, {} elements\n",
                    change.turn, change.idle_turn, change.relative, m_problem.contacts().size());
       run.normals_settled = change.turn < spec.normal_tolerance && change.relative <= spec.normal_tolerance;
       // Relax and test increments that iterate the normals (drag force below the step's
@@ -98,12 +99,12 @@ bool ContactLoop::solve(const ContactLoopRules& rules, const ContactLoopHost& ho
       }
       // Not settling (the residual with the new normals did not at least halve): the increment
       // ends here all the same (an equilibrium with the drag and these normals), the level or
-      // the relax goes on with another increment, and that one detects afresh. Under load the fibers slide at the crossings by several microns while
-      // the drag's force falls (the drag is then tens of N/m): the particles of an element,
-      // facing each other when it was detected, no longer do, and its normal between their
-      // section centres turns by up to 0.1 rad whatever the solve does. Iterating the normals
-      // of such stale pairs did not converge on the 480-fiber biaxial test (residuals 5e-3,
-      // 3e-3, 3e-3, 2e-2 with the new normals); fresh pairs at each solve did (5e-3 to 6e-5).
+      // the relax goes on with another increment, and that one detects afresh. Under load the fibers slide at the
+      // crossings by several microns while the drag's force falls (the drag is then tens of N/m): the particles of an
+      // element, facing each other when it was detected, no longer do, and its normal between their section centres
+      // turns by up to 0.1 rad whatever the solve does. Iterating the normals of such stale pairs did not converge on
+      // the 480-fiber biaxial test (residuals 5e-3, 3e-3, 3e-3, 2e-2 with the new normals); fresh pairs at each solve
+      // did (5e-3 to 6e-5).
       if (relax && stalled) {
         normals_settled = true;
         stalled_increment = true;
@@ -113,7 +114,7 @@ bool ContactLoop::solve(const ContactLoopRules& rules, const ContactLoopHost& ho
     iterations = total_iterations;
     if (!normals_settled) {
       refusal = fmt::format("the contact normals did not settle within contact.max_normal_updates ({}) updates",
-                              spec.max_normal_updates);
+                            spec.max_normal_updates);
       return false;
     }
     const std::vector<ContactResponse> responses = m_problem.contact_responses(q);
@@ -153,7 +154,9 @@ bool ContactLoop::solve(const ContactLoopRules& rules, const ContactLoopHost& ho
     if (debug_newton() && !weave) {
       size_t fresh = 0;
       for (const ContactElement& c : contacts) fresh += c.fresh ? 1 : 0;
-      fmt::print(stderr, " detection: {} elements ({} fresh{}), deepest {:.3f} of the cap ({:.3f} in the solved set), {} penalties raised{}\n",
+      fmt::print(stderr,
+                 " detection: {} elements ({} fresh{}), deepest {:.3f} of the cap ({:.3f} in the solved set), {} "
+                 "penalties raised{}\n",
                  contacts.size(), fresh, fresh_penetrate ? ", some penetrating" : "", deepest, current_deepest, raised,
                  same && (raised == 0 || deferred) ? "" : ": another pass");
       if (!same) {
@@ -172,8 +175,8 @@ bool ContactLoop::solve(const ContactLoopRules& rules, const ContactLoopHost& ho
           const ContactElement& c = contacts[worst];
           const Vec3 x = q.segment<3>(m_model.elements[c.a.element].first_dof + kNodeDofs);
           fmt::print(stderr, "  deepest: {} and {} ({}zone {}, {:.3f} of the cap) near ({:.4e}, {:.4e}, {:.4e}) m\n",
-                     where(c.a.element), where(c.b.element), c.fresh ? "fresh, " : "", c.zone, worst_ratio, x.x(), x.y(),
-                     x.z());
+                     where(c.a.element), where(c.b.element), c.fresh ? "fresh, " : "", c.zone, worst_ratio, x.x(),
+                     x.y(), x.z());
         }
       }
     }
@@ -185,7 +188,7 @@ bool ContactLoop::solve(const ContactLoopRules& rules, const ContactLoopHost& ho
       std::pair<Index, Index> pair;
       if (!weave && m_manager.crossed(q_start, q, &pair)) {
         refusal = fmt::format("{} and {} passed through each other within the increment (the swept check)",
-                                element_name(pair.first), element_name(pair.second));
+                              element_name(pair.first), element_name(pair.second));
         return false;
       }
       // Nothing changed since `responses` (same state, elements, normals and penalties).
@@ -224,7 +227,7 @@ bool ContactLoop::solve(const ContactLoopRules& rules, const ContactLoopHost& ho
     std::pair<Index, Index> through;
     if (!weave && m_manager.passed_through(m_problem.contacts(), fresh_responses, &through)) {
       refusal = fmt::format("a new contact element finds {} and {} through each other", element_name(through.first),
-                              element_name(through.second));
+                            element_name(through.second));
       return false;
     }
     // In steps without a drag: the fresh elements penetrate beyond the cap where the solved
@@ -237,9 +240,8 @@ bool ContactLoop::solve(const ContactLoopRules& rules, const ContactLoopHost& ho
     contacts = m_problem.contacts();
   }
   refusal = fmt::format("the contact detection did not settle within contact.max_detections ({}) passes",
-                          spec.max_detections);
+                        spec.max_detections);
   return false;
 }
-
 
 }  // namespace fibra

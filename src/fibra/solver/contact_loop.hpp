@@ -68,8 +68,8 @@ class ContactLoop {
   /// weave's released depth and whether the normals settled (what ends a relax step or settles
   /// a test level).
   bool solve(const ContactLoopRules& rules, const ContactLoopHost& host, VecX& q, const VecX& q_start,
-             std::vector<double>& history, int& iterations, double& residual, ContactStats& stats,
-             SolverProgress& run, std::string& refusal);
+             std::vector<double>& history, int& iterations, double& residual, ContactStats& stats, SolverProgress& run,
+             std::string& refusal);
   /// The last residual with updated normals and cones of the last solve (-1: not measured; only
   /// a proximal increment whose normals iterate measures it).
   double settling_moved() const { return m_settling_moved; }
