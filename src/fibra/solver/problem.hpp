@@ -99,11 +99,12 @@ class Problem {
   double drag_force_norm(const VecX& q, const VecX& scale, DragPart part = DragPart::All) const {
     return m_drag.force_norm(q, scale, part);
   }
+  /// The drag's stiffness alone (DragTerm::set_stiffness): 0 takes it off, its former value puts it back.
+  void set_drag_stiffness(double c) { m_drag.set_stiffness(c); }
   const VecX& drag_anchor() const { return m_drag.anchor(); }  ///< anchor of the drag
   double drag() const { return m_drag.stiffness(); }            ///< drag stiffness per node [N/m]
   double drag_director_weight() const { return m_drag.director_weight(); }  ///< set_drag's director_weight
   double drag_axial_weight() const { return m_drag.axial_weight(); }        ///< set_drag's axial_weight
-  double drag_position_weight() const { return m_drag.position_weight(); }  ///< set_drag's position_weight
   const FrictionParams& friction() const { return m_contact.friction(); }   ///< set_contacts' friction
   /// P u for node `node`'s position (the drag's force per unit stiffness, see DragTerm::set).
   Vec3 drag_projected(Index node, const Vec3& u) const { return m_drag.projected(node, u); }

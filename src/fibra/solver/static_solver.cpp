@@ -258,10 +258,8 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   host.minimize = [this](std::vector<double>& h, int& its, double& res) { return equilibrium(h, its, res); };
   host.pattern_changed = [this]() { pattern_changed(); };
   host.moved_residual = [this]() { return normal_update_residual(); };
-  const bool ok = m_contact_loop->solve(rules, host, m_q, m_q_start, history, iterations, residual, m_contact_stats,
-                                        m_run, m_refusal);
-  m_settling_moved = m_contact_loop->settling_moved();
-  return ok;
+  return m_contact_loop->solve(rules, host, m_q, m_q_start, history, iterations, residual, m_contact_stats, m_run,
+                               m_refusal);
 }
 
 double StaticSolver::normal_update_residual() {
@@ -428,10 +426,7 @@ int StaticSolver::tangent_negative_pivots() {
   // the held tolerance of the load): its stability is that of the tangent without the drag,
   // whose factor then preconditions nothing (the next increment's tangent holds the drag).
   const double drag = m_problem->drag();
-  const VecX anchor = drag > 0.0 ? m_problem->drag_anchor() : VecX();
-  const double director = m_problem->drag_director_weight(), axial = m_problem->drag_axial_weight(),
-               position = m_problem->drag_position_weight();
-  if (drag > 0.0) m_problem->set_drag(0.0, anchor, director, axial, position);
+  m_problem->set_drag_stiffness(0.0);
   m_problem->evaluate(m_q, nullptr, &m_hessian);
   const auto t0 = std::chrono::steady_clock::now();
   ++m_stats.factorizations;
@@ -442,7 +437,7 @@ int StaticSolver::tangent_negative_pivots() {
   else m_factor_source.valid = false;
   const int negative = definite ? 0 : factorize_indefinite() ? static_cast<int>(m_saddle->negative_pivots()) : -1;
   m_stats.time_factorization += seconds_since(t0);
-  if (drag > 0.0) m_problem->set_drag(drag, anchor, director, axial, position);
+  m_problem->set_drag_stiffness(drag);
   return negative;
 }
 
@@ -1176,7 +1171,7 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       solved.step_dl = step_dl;
       solved.iterations = iterations;
       solved.drag = m_problem->drag();
-      solved.settling_moved = m_settling_moved;
+      solved.settling_moved = m_contact_loop ? m_contact_loop->settling_moved() : -1.0;
       solved.start = &saved;
       solved.state = &m_q;
       iterations += driver->converged(m_run, host, solved);

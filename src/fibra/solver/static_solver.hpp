@@ -220,7 +220,6 @@ class StaticSolver {
   int m_fresh_cg = -1;            // iterations of the first CG solve after the last factorization (-1: none yet)
   VecX m_rhs;                     // right-hand side of the Newton solve
   PcgWorkspace m_pcg;             // conjugate gradients' work vectors
-  double m_settling_moved = -1;   // the increment's last residual with updated normals and cones (-1: not measured)
   double m_reference_force = 0;  // reference force of the last Newton iteration [N]
   // The load of the last Newton iteration: applied forces and reactions, floored at 1e-3 of
   // the reference force's floor only [N] (what a held load step measures against).

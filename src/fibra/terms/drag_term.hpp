@@ -34,6 +34,9 @@ class DragTerm final : public EnergyTerm {
   /// and the bodies, only moments that turn the sections.
   void set(double c, const VecX& anchor, double director_weight, double axial_weight, double position_weight = 1.0);
   double stiffness() const { return m_c; }             ///< c, per node [N/m]
+  /// Changes c only (the anchor, the weights and the tangents set() took from the anchor stay):
+  /// the same drag taken off (0) and put back.
+  void set_stiffness(double c) { m_c = c; }
   const VecX& anchor() const { return m_anchor; }      ///< the anchor state
   double director_weight() const { return m_director; }  ///< set()'s director_weight
   double axial_weight() const { return m_axial; }        ///< set()'s axial_weight
