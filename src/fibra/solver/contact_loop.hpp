@@ -38,6 +38,14 @@ struct ContactLoopRules {
   /// `penetration_slack` (a fraction of it), the penalties raised acting from the next increment.
   bool test_settling = false;
   double penetration_slack = 0;
+  /// The solve that ends a test level with the drag on the positions taken off
+  /// (StaticSolver::release_positions): its state is the level's point, so it is accepted only
+  /// with its normals and cones settled to `tolerance`; where they stop settling it is refused
+  /// and the level's dragged state, settled to that tolerance, stays. (A relax step's release
+  /// ends at its stall, an equilibrium of the forces with its last normals: its dragged state
+  /// leaves the drag's force, up to the relax's tolerance, across the fabric's edges, which a
+  /// relaxed state must balance.)
+  bool release = false;
   double tolerance = 0;  ///< the step's settling tolerance (relative to the reference force)
   double lambda = 0;     ///< the increment's load factor in its step
 };

@@ -252,6 +252,7 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   rules.lagged = lagged;
   rules.test_settling = test_with_drag && !lagged;
   rules.penetration_slack = m_case.solver.method.test_penetration_slack;
+  rules.release = positions_released && m_mode.test;
   rules.tolerance = m_mode.tolerance;
   rules.lambda = lambda;
   ContactLoopHost host;
