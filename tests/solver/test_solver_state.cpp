@@ -141,8 +141,10 @@ Checkpoint small_checkpoint() {
   p.factor.q = VecX::LinSpaced(18, 1.0, 2.0);
   p.factor.contacts.resize(2);
   p.factor.friction = {0.2, 5e-7};
-  p.factor.drag = 1e3;
-  p.factor.drag_anchor = VecX::Zero(18);
+  p.factor.drag.stiffness = 1e3;
+  p.factor.drag.director_weight = 100.0;
+  p.factor.drag.axial_weight = 0.01;
+  p.factor.drag.anchor = VecX::Zero(18);
   p.factor.moments = {{1, Vec3(0, 0, 1)}};
   p.factor.fixed.assign(18, 0);
   p.factor.fixed[0] = 1;
@@ -177,6 +179,10 @@ TEST_F(StateCounts, ACheckpointReadsBackWhole) {
   EXPECT_EQ(c.progress.factor.q, written.progress.factor.q);
   EXPECT_EQ(c.progress.factor.contacts.size(), 2u);
   EXPECT_EQ(c.progress.factor.friction.mu, 0.2);
+  EXPECT_EQ(c.progress.factor.drag.stiffness, 1e3);
+  EXPECT_EQ(c.progress.factor.drag.director_weight, 100.0);
+  EXPECT_EQ(c.progress.factor.drag.axial_weight, 0.01);
+  EXPECT_EQ(c.progress.factor.drag.anchor, written.progress.factor.drag.anchor);
   EXPECT_EQ(c.progress.factor.moments.size(), 1u);
   EXPECT_EQ(c.progress.factor.fixed, written.progress.factor.fixed);
   EXPECT_EQ(c.progress.factor.shift, 1e-12);

@@ -180,15 +180,11 @@ bool ContactLoop::solve(const ContactLoopRules& rules, const ContactLoopHost& ho
           const double r = m_manager.penetration_ratio({contacts[k]}, q);
           if (r > worst_ratio) worst_ratio = r, worst = k;
         }
-        auto where = [this](Index element) {
-          const Fiber& f = m_model.fibers[m_model.elements[element].fiber];
-          return fmt::format("{} element {}", f.name, element - f.first_element);
-        };
         if (worst_ratio > 0.0) {
           const ContactElement& c = contacts[worst];
           const Vec3 x = q.segment<3>(m_model.elements[c.a.element].first_dof + kNodeDofs);
           fmt::print(stderr, "  deepest: {} and {} ({}zone {}, {:.3f} of the cap) near ({:.4e}, {:.4e}, {:.4e}) m\n",
-                     where(c.a.element), where(c.b.element), c.fresh ? "fresh, " : "", c.zone, worst_ratio, x.x(),
+                     element_name(c.a.element), element_name(c.b.element), c.fresh ? "fresh, " : "", c.zone, worst_ratio, x.x(),
                      x.y(), x.z());
         }
       }

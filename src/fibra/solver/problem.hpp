@@ -103,8 +103,9 @@ class Problem {
   void set_drag_stiffness(double c) { m_drag.set_stiffness(c); }
   const VecX& drag_anchor() const { return m_drag.anchor(); }  ///< anchor of the drag
   double drag() const { return m_drag.stiffness(); }            ///< drag stiffness per node [N/m]
-  double drag_director_weight() const { return m_drag.director_weight(); }  ///< set_drag's director_weight
-  double drag_axial_weight() const { return m_drag.axial_weight(); }        ///< set_drag's axial_weight
+  /// The drag whole, to put back with set_drag(const DragSettings&).
+  DragSettings drag_settings() const { return m_drag.settings(); }
+  void set_drag(const DragSettings& s) { m_drag.set(s); }
   const FrictionParams& friction() const { return m_contact.friction(); }   ///< set_contacts' friction
   /// P u for node `node`'s position (the drag's force per unit stiffness, see DragTerm::set).
   Vec3 drag_projected(Index node, const Vec3& u) const { return m_drag.projected(node, u); }

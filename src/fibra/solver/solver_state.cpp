@@ -311,10 +311,10 @@ void put_progress(Out& o, const SolverProgress& p) {
   put_contacts(o, f.contacts);
   o.put(f.friction.mu);
   o.put(f.friction.elastic_slip);
-  o.put(f.drag);
-  o.put(f.director_weight);
-  o.put(f.axial_weight);
-  o.put(f.drag_anchor);
+  o.put(f.drag.stiffness);
+  o.put(f.drag.director_weight);
+  o.put(f.drag.axial_weight);
+  o.put(f.drag.anchor);
   o.put(static_cast<std::uint64_t>(f.moments.size()));
   for (const NodalMoment& m : f.moments) {
     o.put(static_cast<std::int64_t>(m.node));
@@ -379,10 +379,10 @@ SolverProgress get_progress(In& in, const ModelFingerprint& model, Index nodes, 
   f.contacts = get_contacts(in, model.elements);
   f.friction.mu = in.get<double>();
   f.friction.elastic_slip = in.get<double>();
-  f.drag = in.get<double>();
-  f.director_weight = in.get<double>();
-  f.axial_weight = in.get<double>();
-  f.drag_anchor = dof_vector("factorization's drag anchor");
+  f.drag.stiffness = in.get<double>();
+  f.drag.director_weight = in.get<double>();
+  f.drag.axial_weight = in.get<double>();
+  f.drag.anchor = dof_vector("factorization's drag anchor");
   const std::uint64_t moments = in.count(dofs, 8 + 24);
   for (std::uint64_t k = 0; k < moments; ++k) {
     NodalMoment m;
@@ -395,7 +395,8 @@ SolverProgress get_progress(In& in, const ModelFingerprint& model, Index nodes, 
   in.read(f.fixed.data(), f.fixed.size());
   f.shift = in.get<double>();
   if (f.q.size() != model.dofs || f.fixed.size() != dofs || !std::isfinite(f.shift) || f.shift < 0.0 ||
-      !(f.drag >= 0.0 && std::isfinite(f.drag)) || (f.drag > 0.0 && f.drag_anchor.size() != model.dofs))
+      !(f.drag.stiffness >= 0.0 && std::isfinite(f.drag.stiffness)) ||
+      (f.drag.stiffness > 0.0 && f.drag.anchor.size() != model.dofs))
     in.bad("its factorization's record does not match its model: the file is corrupt");
   return p;
 }

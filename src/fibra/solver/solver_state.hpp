@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "fibra/contact/contact_element.hpp"
+#include "fibra/terms/drag_term.hpp"
 #include "fibra/terms/load_term.hpp"
 #include "fibra/core/types.hpp"
 
@@ -88,8 +89,9 @@ struct FactorSource {
   std::vector<double> bodies;     ///< BodySystem::snapshot() then
   std::vector<ContactElement> contacts;
   FrictionParams friction;
-  double drag = 0, director_weight = 1, axial_weight = 1;  ///< DragTerm::set's arguments
-  VecX drag_anchor;
+  /// The drag (its position weight always 1: a release's factorizations, without the drag on
+  /// the positions, are never reused, StaticSolver::release_positions).
+  DragSettings drag;
   std::vector<NodalMoment> moments;
   std::vector<char> fixed;        ///< eliminated dofs
   double shift = 0;               ///< the diagonal shift it was factorized with

@@ -232,15 +232,18 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   // 480-fiber equibiaxial test they went on to residual_tolerance, 7-8 iterations and 2-3
   // more after a binding update per pass, where the last 2-4 changed the edge forces by less
   // than 1e-5 of the reference force (docs/performance.md, "Test levels").
+  // The first level's loading increment has no earlier loading increment to expect its drag
+  // force from: its first minimization measures it (equilibrium()). Solved to
+  // residual_tolerance, its binding updates re-solved it 6 and 4 times in its two detection
+  // passes on the 480-fiber plain shear (18 of its 44 Newton iterations), each to a residual
+  // ten thousand times below the 6e-2 drag force it left.
   m_tolerance_scale = 1.0;
+  m_tolerance_from_drag = false;
   const bool test_with_drag = m_mode.test && m_mode.drag > 0.0;
   if (test_with_drag) {
     const double expected = !lagged ? m_mode.tolerance : m_mode.loading ? m_run.load_residual : m_run.relax_residual;
-    const double loose = m_case.solver.method.test_inexact * expected;
-    if (loose > m_newton_tolerance) {
-      m_tolerance_scale = loose / m_newton_tolerance;
-      m_newton_tolerance = loose;
-    }
+    m_tolerance_from_drag = lagged && m_mode.loading && !(m_run.load_residual > 0.0);
+    loosen_tolerance(m_case.solver.method.test_inexact * expected);
   }
 
   // The contact loops (solver/contact_loop.hpp): detection passes, the normals and cones to
@@ -279,9 +282,14 @@ double StaticSolver::drag_residual(DragPart part) const {
   return m_problem->drag_force_norm(m_q, m_force_scale, part) / std::max(settling_reference(), 1e-300);
 }
 
+void StaticSolver::loosen_tolerance(double loose) {
+  if (loose <= m_newton_tolerance) return;
+  m_tolerance_scale *= loose / m_newton_tolerance;
+  m_newton_tolerance = loose;
+}
+
 bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, double& residual) {
   iterations = 0;
-  const double tolerance = m_case.solver.binding_tolerance * m_model.length_scale * m_tolerance_scale;
   // The lagged quantities updated between minimizations within an increment (the bindings'
   // multipliers and anchors, BindingTerm::update_lagged); the contact's are updated around
   // this loop, by solve_increment.
@@ -291,6 +299,13 @@ bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, do
     const bool ok = newton(history, its, residual);
     iterations += its;
     if (!ok) return false;
+    // A test's first loading increment: the drag force its first minimization leaves is the
+    // one the increment is expected to leave (solve_increment).
+    if (m_tolerance_from_drag) {
+      m_tolerance_from_drag = false;
+      loosen_tolerance(m_case.solver.method.test_inexact * drag_residual(DragPart::Positions));
+    }
+    const double tolerance = m_case.solver.binding_tolerance * m_model.length_scale * m_tolerance_scale;
     if (m_problem->update_lagged(m_q, {tolerance, m_newton_tolerance * m_reference_force})) return true;
     ++m_binding_updates;
     ++m_stats.binding_updates;
@@ -850,10 +865,7 @@ void StaticSolver::record_factor_source(double shift) {
   f.bodies = m_bodies ? m_bodies->snapshot() : std::vector<double>{};
   f.contacts = m_problem->contacts();
   f.friction = m_problem->friction();
-  f.drag = m_problem->drag();
-  f.director_weight = m_problem->drag_director_weight();
-  f.axial_weight = m_problem->drag_axial_weight();
-  f.drag_anchor = m_problem->drag_anchor();
+  f.drag = m_problem->drag_settings();
   f.moments = m_problem->moments();
   f.fixed = m_problem->fixed();
   f.shift = shift;
@@ -862,21 +874,19 @@ void StaticSolver::record_factor_source(double shift) {
 void StaticSolver::refactorize(const FactorSource& f) {
   // The problem as it is, put back after.
   const LaggedStates lagged = m_problem->save_lagged();
-  const double drag = m_problem->drag(), director = m_problem->drag_director_weight(),
-               axial = m_problem->drag_axial_weight();
-  const VecX anchor = m_problem->drag_anchor();
+  const DragSettings drag = m_problem->drag_settings();
   const std::vector<NodalMoment> moments = m_problem->moments();
   const std::vector<char> fixed = m_problem->fixed();
   // The problem as the factorization saw it (a checkpoint's record of it).
   if (m_bodies) m_bodies->restore(f.bodies);
   if (m_contact && m_problem->set_contacts(f.contacts, f.friction)) pattern_changed();
-  m_problem->set_drag(f.drag, f.drag_anchor, f.director_weight, f.axial_weight);
+  m_problem->set_drag(f.drag);
   m_problem->moments() = f.moments;
   m_problem->fixed() = f.fixed;
   m_problem->evaluate(f.q, nullptr, &m_hessian);
   const bool ok = m_linear->factorize(m_hessian, f.shift) == FactorStatus::Ok;
   if (m_problem->restore_lagged(lagged)) pattern_changed();
-  m_problem->set_drag(drag, anchor, director, axial);
+  m_problem->set_drag(drag);
   m_problem->moments() = moments;
   m_problem->fixed() = fixed;
   m_factor_source = f;
@@ -930,9 +940,8 @@ bool StaticSolver::release_positions(int step, double lambda, int& iterations) {
   const LaggedStates lagged = m_problem->save_lagged();
   const ContactStats contact_stats = m_contact_stats;
   const int binding_updates = m_binding_updates;
-  const double reference = m_reference_force, drag = m_problem->drag(), director = m_problem->drag_director_weight(),
-               axial = m_problem->drag_axial_weight();
-  const VecX drag_anchor = m_problem->drag_anchor();
+  const double reference = m_reference_force;
+  const DragSettings drag = m_problem->drag_settings();
   // The same increment (its start, its drag's anchor), from its solution with the drag.
   std::vector<double> history;
   double residual = 0.0;
@@ -962,7 +971,7 @@ bool StaticSolver::release_positions(int step, double lambda, int& iterations) {
   m_q = q;
   m_gradient = gradient;
   if (m_problem->restore_lagged(lagged)) pattern_changed();
-  m_problem->set_drag(drag, drag_anchor, director, axial);
+  m_problem->set_drag(drag);
   m_contact_stats = contact_stats;
   m_binding_updates = binding_updates;
   m_reference_force = reference;

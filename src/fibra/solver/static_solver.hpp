@@ -176,6 +176,8 @@ class StaticSolver {
   /// Newton, then augmented-Lagrangian updates of the binding multipliers until the binding
   /// conditions hold (each update followed by Newton again).
   bool equilibrium(std::vector<double>& history, int& iterations, double& residual);
+  /// Raises the current Newton tolerance to `loose` where that is looser, the bindings' alike.
+  void loosen_tolerance(double loose);
   /// Relative residual (scaled like Newton's, over the reference force) at the current state with
   /// the contact normals and frozen cones just updated: how far the update moved the forces.
   double normal_update_residual();
@@ -226,6 +228,7 @@ class StaticSolver {
   double m_load_force = 0;
   double m_newton_tolerance = 0;  // residual tolerance of the current Newton solves (relative; >= residual_tolerance)
   double m_tolerance_scale = 1;   // the current Newton tolerance over the step's own (pseudo_ or residual_tolerance)
+  bool m_tolerance_from_drag = false;  // the next minimization's drag force sets the Newton tolerance (equilibrium())
   IncrementMode m_mode;          // how the increment being solved is solved (its step's driver)
   int m_iteration_factor = 1;    // the current increment may take this many times max_iterations (1, 2 or 4)
   SolverProgress m_run;          // where run() is: its step, the step's increment control (progress())

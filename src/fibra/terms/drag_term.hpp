@@ -17,6 +17,13 @@ namespace fibra {
 /// and the sections' deformation, which turn no edge force).
 enum class DragPart { All, Positions, Sections };
 
+/// What DragTerm::set takes: the drag whole, as a solver saves and puts it back.
+struct DragSettings {
+  double stiffness = 0;  ///< c, per node [N/m] (0: no drag)
+  VecX anchor;           ///< the anchor state
+  double director_weight = 1, axial_weight = 1, position_weight = 1;
+};
+
 /// Drag of every node (and body) towards an anchor state.
 class DragTerm final : public EnergyTerm {
  public:
@@ -33,6 +40,9 @@ class DragTerm final : public EnergyTerm {
   /// p = 0 only the section vectors are held: the drag exerts no force on the nodes' positions
   /// and the bodies, only moments that turn the sections.
   void set(double c, const VecX& anchor, double director_weight, double axial_weight, double position_weight = 1.0);
+  /// The drag as set() took it (with set_stiffness()'s c): set(settings()) changes nothing.
+  DragSettings settings() const { return {m_c, m_anchor, m_director, m_axial, m_position}; }
+  void set(const DragSettings& s) { set(s.stiffness, s.anchor, s.director_weight, s.axial_weight, s.position_weight); }
   double stiffness() const { return m_c; }             ///< c, per node [N/m]
   /// Changes c only (the anchor, the weights and the tangents set() took from the anchor stay):
   /// the same drag taken off (0) and put back.
