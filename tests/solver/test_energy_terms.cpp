@@ -472,7 +472,7 @@ TEST(EnergyTerms, DragForceByParts) {
   EXPECT_EQ(term.force_norm(q, scale, DragPart::Positions), 0.0);
   EXPECT_NEAR(term.force_norm(q, scale, DragPart::Sections), sections, 1e-12 * sections);
   EXPECT_NEAR(term.force_norm(q, scale), sections, 1e-12 * sections);
-  EXPECT_EQ(term.position_weight(), 0.0);
+  EXPECT_EQ(term.settings().position_weight, 0.0);
 }
 
 // The projection of a local Hessian (assembly/psd_projection.hpp): negative eigenvalues set to

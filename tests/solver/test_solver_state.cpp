@@ -191,6 +191,18 @@ TEST_F(StateCounts, ACheckpointReadsBackWhole) {
   EXPECT_EQ(c.case_file, "case.toml");
 }
 
+// A factorization made without the drag on the positions (a release's) is not kept: the
+// record has no position weight, and a resumed run would factorize another matrix.
+TEST_F(StateCounts, AReleasesFactorizationIsNotKept) {
+  Checkpoint written = small_checkpoint();
+  written.progress.factor.drag.position_weight = 0.0;
+  write_checkpoint_file((m_dir / "checkpoint.bin").string(), written);
+  const Checkpoint c = read_checkpoint_file((m_dir / "checkpoint.bin").string());
+  EXPECT_FALSE(c.progress.factor.valid);
+  EXPECT_EQ(c.progress.krylov_budget, 40);
+  EXPECT_EQ(c.run, written.run);
+}
+
 // A state with empty lists (no bodies, contacts, moments nor prescribed dofs) reads back: in
 // the sanitized build, an empty list's copy took a null pointer (found by fuzz_state).
 TEST_F(StateCounts, EmptyListsReadBack) {

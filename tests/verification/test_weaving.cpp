@@ -599,7 +599,9 @@ TEST(FabricTests, LevelPredictorSavesIterationsNotTheCurve) {
 // x). `check` sees every settled increment, with the run.
 struct TestStepRun {
   int iterations = 0, detections = 0;
-  int first_loading = -1;  // Newton iterations of the first level's loading increment
+  // Newton iterations of the test step's first increment: its first level's loading (with a
+  // release's, were the level to settle there; the levels here do not).
+  int first_loading = -1;
   std::vector<double> forces;
 };
 TestStepRun run_test_step(const std::function<void(Case&)>& method, const std::string& step, bool pull, const std::string& file,
@@ -626,8 +628,8 @@ TestStepRun run_test_step(const std::function<void(Case&)>& method, const std::s
 // force it is expected to leave, a settling one to a hundredth of test_tolerance; with 0 to
 // pseudo_tolerance and residual_tolerance. The settled points are equilibria to test_tolerance
 // either way, and their forces agree to the path-dependence of friction. The first level's
-// loading increment, with no earlier one to expect its drag force from, takes the one its
-// first minimization leaves: it alone is solved differently only by that rule.
+// loading increment has no earlier one to expect its drag force from: it takes the drag force
+// its first minimization leaves (without that rule it is solved as with test_inexact = 0).
 // Here an equibiaxial pull of 0.4 % and a shear of 4 degrees, each in two levels. Measured
 // (the settling solves to a hundredth of test_tolerance too): biaxial 32 Newton iterations
 // against 43 (the first loading increment 2 against 4; 4 and 34 in all without its rule), x+

@@ -101,7 +101,6 @@ class Problem {
   }
   /// The drag's stiffness alone (DragTerm::set_stiffness): 0 takes it off, its former value puts it back.
   void set_drag_stiffness(double c) { m_drag.set_stiffness(c); }
-  const VecX& drag_anchor() const { return m_drag.anchor(); }  ///< anchor of the drag
   double drag() const { return m_drag.stiffness(); }            ///< drag stiffness per node [N/m]
   /// The drag whole, to put back with set_drag(const DragSettings&).
   DragSettings drag_settings() const { return m_drag.settings(); }

@@ -304,8 +304,11 @@ void put_progress(Out& o, const SolverProgress& p) {
   o.put(static_cast<std::uint8_t>(p.project_hessians));
   o.put(static_cast<std::int32_t>(p.stats.indefinite_iterations));
   const FactorSource& f = p.factor;
-  o.put(static_cast<std::uint8_t>(f.valid));
-  if (!f.valid) return;
+  // A record without the drag on the positions (a release's, never reused) is not kept: the
+  // format has no position weight, and the resumed run factorizes afresh.
+  const bool valid = f.valid && f.drag.position_weight == 1.0;
+  o.put(static_cast<std::uint8_t>(valid));
+  if (!valid) return;
   o.put(f.q);
   o.put(f.bodies);
   put_contacts(o, f.contacts);

@@ -89,8 +89,9 @@ struct FactorSource {
   std::vector<double> bodies;     ///< BodySystem::snapshot() then
   std::vector<ContactElement> contacts;
   FrictionParams friction;
-  /// The drag (its position weight always 1: a release's factorizations, without the drag on
-  /// the positions, are never reused, StaticSolver::release_positions).
+  /// The drag (a checkpoint keeps a record only with the position weight 1: a release's
+  /// factorizations, without the drag on the positions, are never reused,
+  /// StaticSolver::release_positions).
   DragSettings drag;
   std::vector<NodalMoment> moments;
   std::vector<char> fixed;        ///< eliminated dofs

@@ -47,10 +47,6 @@ class DragTerm final : public EnergyTerm {
   /// Changes c only (the anchor, the weights and the tangents set() took from the anchor stay):
   /// the same drag taken off (0) and put back.
   void set_stiffness(double c) { m_c = c; }
-  const VecX& anchor() const { return m_anchor; }      ///< the anchor state
-  double director_weight() const { return m_director; }  ///< set()'s director_weight
-  double axial_weight() const { return m_axial; }        ///< set()'s axial_weight
-  double position_weight() const { return m_position; }  ///< set()'s position_weight
   /// Norm of the drag's force at q over the dofs of `part`, each dof's component multiplied by
   /// `scale`; 0 without drag.
   double force_norm(const VecX& q, const VecX& scale, DragPart part = DragPart::All) const;
