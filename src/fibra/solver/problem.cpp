@@ -1,5 +1,7 @@
 #include "fibra/solver/problem.hpp"
 
+#include "fibra/solver/krylov.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <stdexcept>
@@ -166,6 +168,27 @@ LocalSpectrum local_spectrum(const Eigen::MatrixXd& full, const std::vector<Inde
 }
 
 }  // namespace
+
+std::string Problem::step_energies(const VecX& q, const VecX& dq) {
+  m_group_fixed.assign(m_model.num_groups(), 0);
+  for (Index d = 0; d < q.size(); ++d)
+    if (m_fixed[d]) m_group_fixed[m_pattern.group_of_dof(d)] = 1;
+  VecX g(q.size()), hdq(q.size());
+  std::vector<double> h;
+  std::vector<VecX> scratch;
+  const VecX trial = q + dq;
+  std::string out;
+  for (EnergyTerm* t : m_terms) {
+    g.setZero();
+    h.assign(m_pattern.nonzeros(), 0.0);
+    const double e0 = t->assemble(q, {&m_pattern, &m_fixed, &m_group_fixed, &g, &h});
+    const double e1 = t->assemble(trial, {&m_pattern, &m_fixed, &m_group_fixed, nullptr, nullptr});
+    symmetric_multiply(m_pattern, h, 0.0, dq, hdq, scratch);
+    out += fmt::format("   {}: change {:.4e} J, model {:.4e} J (slope {:.4e}, curvature {:.4e})\n", t->name(), e1 - e0,
+                       g.dot(dq) + 0.5 * dq.dot(hdq), g.dot(dq), dq.dot(hdq));
+  }
+  return out;
+}
 
 std::string Problem::local_spectra(const VecX& q) const {
   // Negative beyond rounding: below -1e-10 of the local matrix's largest eigenvalue.

@@ -116,6 +116,11 @@ class Problem {
   /// of positive semi-definite local matrices is positive semi-definite: the terms listed are
   /// where negative curvature comes from.
   std::string local_spectra(const VecX& q) const;
+  /// Developers' diagnostic of a step the line search shortened: for each term, its energy's
+  /// change from q to q + dq against its quadratic model at q (g . dq + dq . H dq / 2, the
+  /// exact local Hessians). A term whose change exceeds its model is what the Newton step
+  /// overshoots on.
+  std::string step_energies(const VecX& q, const VecX& dq);
   /// Total potential energy at q; fills the gradient of Pi on every dof (f_int - f_ext) and
   /// the Hessian values (free-free block; eliminated dofs get a unit-scaled diagonal).
   double evaluate(const VecX& q, VecX* gradient, std::vector<double>* hessian);

@@ -538,9 +538,16 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     bool solved = false;
     m_rhs = -r;
     if (m_krylov_budget > 0 && m_reuse_factor && m_linear->has_factor()) {
+      // Inexact Newton: CG's relative residual times this residual is the residual the step
+      // would leave were the energy quadratic, so a step need not be solved beyond half the
+      // tolerance (at most to a tenth, at least to method.krylov_tolerance, 1e-3, as far from
+      // it). The last iteration of a solve, whose residual is within a few times the tolerance,
+      // so stops after a few CG iterations instead of going on to 1e-3 (docs/theory/solver.md,
+      // "Reusing the factorization").
+      const double forcing = std::clamp(0.5 * tolerance / residual, opt.method.krylov_tolerance, 0.1);
       const PcgResult cg = pcg(
           m_problem->pattern(), m_hessian, 0.0, m_rhs, dq, [this](const VecX& b, VecX& x) { m_linear->precondition(b, x); },
-          m_force_scale, opt.method.krylov_tolerance, m_krylov_budget, m_pcg);
+          m_force_scale, forcing, m_krylov_budget, m_pcg);
       m_stats.krylov_iterations += cg.iterations;
       solved = cg.converged;
       if (debug_newton()) {
@@ -549,9 +556,9 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
         const std::vector<double>& trail = m_pcg.history;
         for (size_t i = 0; i < trail.size(); ++i)
           if (i % 10 == 0 || i + 1 == trail.size()) trace += fmt::format(" {:.1e}", trail[i]);
-        fmt::print(stderr, "  it {:2d} conjugate gradients: {} iterations, {} ({:.2f} s); residual{}\n", iterations,
-                   cg.iterations, cg.converged ? "converged" : cg.breakdown ? "broke down" : "not converged",
-                   seconds_since(t0), trace);
+        fmt::print(stderr, "  it {:2d} conjugate gradients: {} iterations, {} to {:.1e} ({:.2f} s); residual{}\n",
+                   iterations, cg.iterations, cg.converged ? "converged" : cg.breakdown ? "broke down" : "not converged",
+                   forcing, seconds_since(t0), trace);
       }
       if (solved) ++m_stats.reused_factorizations;
       // A slow solve (more than half of the CG budget): the factor has aged, the next
@@ -561,11 +568,15 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       // settling solves took 32-54 iterations each with an aged factor against 3-15 with a
       // fresh one, seven solves in a row below the per-solve threshold.
       // (Counted in iterations, not seconds: the solver's path stays the same from run to run.)
+      // The factor's age is judged on the iterations the solve would have taken to 1e-3 (CG's
+      // residual falls about geometrically: iterations scale with the decades gained).
+      const int aged = static_cast<int>(
+          std::lround(cg.iterations * std::log(opt.method.krylov_tolerance) / std::log(std::max(forcing, 1e-300))));
       if (solved) {
-        if (m_fresh_cg < 0) m_fresh_cg = cg.iterations;
-        m_cg_excess += std::max(0, cg.iterations - m_fresh_cg);
+        if (m_fresh_cg < 0) m_fresh_cg = aged;
+        m_cg_excess += std::max(0, aged - m_fresh_cg);
       }
-      m_reuse_factor = solved && 2 * cg.iterations <= m_krylov_budget && m_cg_excess < m_krylov_budget;
+      m_reuse_factor = solved && 2 * aged <= m_krylov_budget && m_cg_excess < m_krylov_budget;
       m_stats.time_solve += seconds_since(t0);
     }
     if (!solved) {
@@ -712,6 +723,9 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
         e1 = m_problem->evaluate(trial, nullptr, nullptr);
         ++m_stats.line_search_trials;
       }
+      if (alpha < 1.0 && debug_newton())
+        fmt::print(stderr, "  it {:2d} step shortened to {:.3f}; the full step's energy by term:\n{}", iterations, alpha,
+                   m_problem->step_energies(m_q, dq));
       if (alpha < 1.0 && !shortened) {
         shortened = true;
         ++m_stats.searched_solves;
