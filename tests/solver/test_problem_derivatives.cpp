@@ -12,6 +12,7 @@
 // moment_generalized_force: its derivative against FD of the force, symmetry, the force as the
 // gradient of moment_work (d work / d g = f), the couple identity g1 x f1 + g2 x f2 = M for
 // section vectors normal to the axis, and the work of a rotation about the axis.
+#include <cstdio>
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -411,6 +412,51 @@ name = "s"
   // Stretched by 20 %: stable again.
   for (Index n = 0; n < model.num_nodes(); ++n) q[9 * n] = 1.2 * model.reference[9 * n];
   EXPECT_NE(p.local_spectra(q).find("beam elements: 0 of 4"), std::string::npos) << p.local_spectra(q);
+}
+
+// The developers' diagnostic of a shortened Newton step (Problem::step_energies): each term's
+// energy change along dq against its quadratic model at q. A fiber stretched by 1 %, its free
+// end moved on along the axis: the beam's energy is quartic in the stretch (St Venant-Kirchhoff:
+// (lambda^2 - 1)^2), so its change matches the model for a small step and falls short of it by
+// the quartic's higher terms for a large one.
+TEST(ProblemDiagnostics, StepEnergiesCompareEachTermWithItsQuadraticModel) {
+  const Case c = parse_case_toml(R"(
+[[material]]
+name = "m"
+young = 1e9
+poisson = 0.3
+[[fiber]]
+name = "a"
+material = "m"
+radius = 0.01
+elements = 4
+points = [[0, 0, 0], [1, 0, 0]]
+[[step]]
+name = "s"
+)",
+                                 "stretched.toml");
+  const Model model = build_model(c);
+  Problem p(model);
+  VecX q = model.reference;
+  for (Index n = 0; n < model.num_nodes(); ++n) q[9 * n] *= 1.01;
+  auto beam = [&](double size) {
+    VecX dq = VecX::Zero(q.size());
+    for (Index n = 0; n < model.num_nodes(); ++n) dq[9 * n] = size * model.reference[9 * n];
+    const std::string report = p.step_energies(q, dq);
+    const size_t at = report.find("beam elements: change ");
+    EXPECT_NE(at, std::string::npos) << report;
+    double change = 0.0, model_change = 0.0;
+    EXPECT_EQ(std::sscanf(report.c_str() + at, "beam elements: change %lf J, model %lf J", &change, &model_change), 2)
+        << report;
+    EXPECT_NE(report.find("drag: change 0.0000e+00 J, model 0.0000e+00 J"), std::string::npos) << report;
+    return std::pair{change, model_change};
+  };
+  const auto [small, small_model] = beam(1e-5);
+  EXPECT_GT(small, 0.0);
+  EXPECT_NEAR(small_model / small, 1.0, 1e-3);
+  // Stretched on to 1.21: (1.21^2 - 1)^2 against its quadratic model from 1.01, 16 % below.
+  const auto [large, large_model] = beam(0.2);
+  EXPECT_NEAR(large_model / large, 0.842, 0.01) << large << " " << large_model;
 }
 
 }  // namespace
