@@ -380,12 +380,8 @@ TEST(MomentLoad, AxisAlongAReferenceVectorUpToRoundingAddsNoStiffnessOnIt) {
 namespace fibra {
 namespace {
 
-// The developers' diagnostic of indefinite tangents (Problem::local_spectra): a straight fiber
-// at rest has positive semi-definite element Hessians; squeezed to half its length (St
-// Venant-Kirchhoff softens and turns unstable below a stretch of 1/sqrt(3)) every element's
-// Hessian has a negative eigenvalue, and the report names the elements and counts them.
-TEST(ProblemDiagnostics, LocalSpectraFindTheIndefiniteElements) {
-  const Case c = parse_case_toml(R"(
+// A straight fiber of 4 elements along x, 1 m long: the diagnostics' model.
+constexpr const char* kStraightFiber = R"(
 [[material]]
 name = "m"
 young = 1e9
@@ -398,8 +394,14 @@ elements = 4
 points = [[0, 0, 0], [1, 0, 0]]
 [[step]]
 name = "s"
-)",
-                                 "straight.toml");
+)";
+
+// The developers' diagnostic of indefinite tangents (Problem::local_spectra): a straight fiber
+// at rest has positive semi-definite element Hessians; squeezed to half its length (St
+// Venant-Kirchhoff softens and turns unstable below a stretch of 1/sqrt(3)) every element's
+// Hessian has a negative eigenvalue, and the report names the elements and counts them.
+TEST(ProblemDiagnostics, LocalSpectraFindTheIndefiniteElements) {
+  const Case c = parse_case_toml(kStraightFiber, "straight.toml");
   const Model model = build_model(c);
   Problem p(model);
   const std::string rest = p.local_spectra(model.reference);
@@ -420,21 +422,7 @@ name = "s"
 // (lambda^2 - 1)^2), so its change matches the model for a small step and falls short of it by
 // the quartic's higher terms for a large one.
 TEST(ProblemDiagnostics, StepEnergiesCompareEachTermWithItsQuadraticModel) {
-  const Case c = parse_case_toml(R"(
-[[material]]
-name = "m"
-young = 1e9
-poisson = 0.3
-[[fiber]]
-name = "a"
-material = "m"
-radius = 0.01
-elements = 4
-points = [[0, 0, 0], [1, 0, 0]]
-[[step]]
-name = "s"
-)",
-                                 "stretched.toml");
+  const Case c = parse_case_toml(kStraightFiber, "stretched.toml");
   const Model model = build_model(c);
   Problem p(model);
   VecX q = model.reference;
