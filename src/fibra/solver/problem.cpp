@@ -110,16 +110,20 @@ Index Problem::projected_hessian(const VecX& q, std::vector<double>& hessian) {
   return projected;
 }
 
+AssemblyTarget Problem::target(VecX* gradient, std::vector<double>* hessian) {
+  m_group_fixed.assign(m_model.num_groups(), 0);
+  for (Index d = 0; d < static_cast<Index>(m_fixed.size()); ++d)
+    if (m_fixed[d]) m_group_fixed[m_pattern.group_of_dof(d)] = 1;
+  return {&m_pattern, &m_fixed, &m_group_fixed, gradient, hessian};
+}
+
 double Problem::evaluate(const VecX& q, VecX* gradient, std::vector<double>* hessian) {
   const auto t0 = std::chrono::steady_clock::now();
   if (gradient) gradient->setZero(q.size());
   if (hessian) hessian->assign(m_pattern.nonzeros(), 0.0);
-  m_group_fixed.assign(m_model.num_groups(), 0);
-  for (Index d = 0; d < q.size(); ++d)
-    if (m_fixed[d]) m_group_fixed[m_pattern.group_of_dof(d)] = 1;
-  const AssemblyTarget target{&m_pattern, &m_fixed, &m_group_fixed, gradient, hessian};
+  const AssemblyTarget into = target(gradient, hessian);
   double energy = 0.0;
-  for (EnergyTerm* t : m_terms) energy += t->assemble(q, target);
+  for (EnergyTerm* t : m_terms) energy += t->assemble(q, into);
   if (hessian) {
     double scale = 0.0;
     Index count = 0;
@@ -170,19 +174,20 @@ LocalSpectrum local_spectrum(const Eigen::MatrixXd& full, const std::vector<Inde
 }  // namespace
 
 std::string Problem::step_energies(const VecX& q, const VecX& dq) {
-  m_group_fixed.assign(m_model.num_groups(), 0);
-  for (Index d = 0; d < q.size(); ++d)
-    if (m_fixed[d]) m_group_fixed[m_pattern.group_of_dof(d)] = 1;
   VecX g(q.size()), hdq(q.size());
   std::vector<double> h;
   std::vector<VecX> scratch;
+  const AssemblyTarget with_derivatives = target(&g, &h);
+  AssemblyTarget energy_only = with_derivatives;
+  energy_only.gradient = nullptr;
+  energy_only.values = nullptr;
   const VecX trial = q + dq;
   std::string out;
   for (EnergyTerm* t : m_terms) {
     g.setZero();
     h.assign(m_pattern.nonzeros(), 0.0);
-    const double e0 = t->assemble(q, {&m_pattern, &m_fixed, &m_group_fixed, &g, &h});
-    const double e1 = t->assemble(trial, {&m_pattern, &m_fixed, &m_group_fixed, nullptr, nullptr});
+    const double e0 = t->assemble(q, with_derivatives);
+    const double e1 = t->assemble(trial, energy_only);
     symmetric_multiply(m_pattern, h, 0.0, dq, hdq, scratch);
     out += fmt::format("   {}: change {:.4e} J, model {:.4e} J (slope {:.4e}, curvature {:.4e})\n", t->name(), e1 - e0,
                        g.dot(dq) + 0.5 * dq.dot(hdq), g.dot(dq), dq.dot(hdq));

@@ -131,6 +131,9 @@ class Problem {
 
  private:
   void build_pattern();
+  /// The terms' assembly target into `gradient` and `hessian` (either may be null), with the
+  /// groups that hold a fixed dof marked afresh.
+  AssemblyTarget target(VecX* gradient, std::vector<double>* hessian);
   const Model& m_model;
   BodySystem* m_bodies = nullptr;
   BeamTerm m_beams;
