@@ -93,7 +93,8 @@ void check_derivatives(const Pair& s, const FrictionParams& fp, bool consistent,
   };
   ContactVec g;
   ContactMat h;
-  contact_element_energy(s.c, q.data(), q.data() + kElementDofs, fp, &g, &h, nullptr, consistent);
+  contact_element_energy(s.c, q.data(), q.data() + kElementDofs, fp, &g, &h, nullptr,
+                         consistent ? ContactTangent::Consistent : ContactTangent::Exact);
   const double step = test::fd_step(1e-6);
   const Eigen::MatrixXd hfd = test::fd_jacobian(grad_of, q, step);
   EXPECT_LT(test::rel_error(h, hfd, 1e-300), tol) << what;
@@ -161,7 +162,7 @@ TEST(ContactElement, SymmetricTangentIsTheSymmetricApproximation) {
   const FrictionParams fp{0.3, 1e-6};
   const Pair s = make_pair(rng, -3e-6, Vec3(1e-8, 0, 0));
   ContactMat h;
-  contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, &h, nullptr, false);
+  contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, &h, nullptr, ContactTangent::Exact);
   EXPECT_LT((h - h.transpose()).norm(), 1e-12 * h.norm());
   Eigen::SelfAdjointEigenSolver<ContactMat> eig(h);
   EXPECT_GT(eig.eigenvalues().minCoeff(), -1e-9 * h.norm());  // positive semi-definite
@@ -192,7 +193,7 @@ TEST(ContactElement, FrozenConeGivesAnExactSymmetricTangent) {
       check_derivatives(s, fp, false, 1e-5, what);
       check_derivatives(s, fp, true, 1e-5, what);
       ContactMat h;
-      contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, &h, nullptr, true);
+      contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, &h, nullptr, ContactTangent::Consistent);
       EXPECT_LT((h - h.transpose()).norm(), 1e-12 * h.norm()) << what << ": the exact tangent is symmetric";
       // The gradient is that of the energy (a potential of the slip), away from the cone's edge.
       expect_gradient_of_energy(s, fp, what);
@@ -225,6 +226,93 @@ TEST(ContactElement, FrozenConeGivesAnExactSymmetricTangent) {
   contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, nullptr, &r);
   EXPECT_GT(r.normal_force, 0.0);
   EXPECT_EQ(r.friction.norm(), 0.0);
+}
+
+// The tangent above the energy (ContactTangent::Majorizing): the normal law's largest curvature
+// k whatever the penetration, and on the friction cone the across-curvature k_t L / |T| along
+// the trial force too. Its quadratic model, g . dq + dq . H dq / 2, lies above the element's
+// energy change for every step dq: open, in the law's quadratic start and beyond it; in stick
+// and in slip with friction carried over; steps that turn the slip back, bring it into stick,
+// slide it further, press or open. The Exact model falls below the energy on some of those
+// steps (the test tells the two apart), and contact_step_model measures by how much.
+TEST(ContactElement, MajorizingTangentLiesAboveTheEnergy) {
+  std::mt19937 rng(31);
+  const FrictionParams fp{0.3, 1e-6};
+  std::uniform_real_distribution<double> u(-1, 1);
+  struct Along {
+    double change, majorizing, exact;
+  };
+  auto along = [&](const Pair& s, const Eigen::VectorXd& dq) {
+    Eigen::VectorXd q(kContactDofs);
+    q << s.qa, s.qb;
+    const Eigen::VectorXd t = q + dq;
+    auto energy = [&](const Eigen::VectorXd& x) {
+      return contact_element_energy(s.c, x.data(), x.data() + kElementDofs, fp, nullptr, nullptr, nullptr);
+    };
+    auto model = [&](ContactTangent tangent) {
+      ContactVec g;
+      ContactMat h;
+      contact_element_energy(s.c, q.data(), q.data() + kElementDofs, fp, &g, &h, nullptr, tangent);
+      return g.dot(dq) + 0.5 * dq.dot(h * dq);
+    };
+    return Along{energy(t) - energy(q), model(ContactTangent::Majorizing), model(ContactTangent::Exact)};
+  };
+  int below_exact = 0, slipping = 0, open = 0;
+  for (double gap : {1e-6, -0.5e-6, -3e-6}) {  // open, in the quadratic start (p_r = 1e-6), beyond
+    for (double carried : {0.0, 0.5, 1.6}) {  // |f_prev| / (mu f_n)
+      for (double slide : {1e-8, 0.5e-6, 3e-6}) {
+        Pair s = make_pair(rng, gap, slide * Vec3(u(rng), u(rng), u(rng)).normalized());
+        ContactResponse now;
+        contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, nullptr, &now);
+        // The cone frozen at the force of 2 um of penetration, open elements too (a frozen spring
+        // acts on an element that opens during a solve).
+        s.c.friction_normal = s.c.law.force(2e-6);
+        const Vec3 n = s.c.normal;
+        Vec3 dir = Vec3(u(rng), u(rng), u(rng));
+        dir = (dir - dir.dot(n) * n).normalized();
+        s.c.friction_previous = carried * fp.mu * s.c.friction_normal * dir;
+        ContactResponse r;
+        contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, nullptr, &r);
+        slipping += r.slip;
+        open += r.gap > 0.0;
+        ContactMat hm, he;
+        contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, &hm, nullptr, ContactTangent::Majorizing);
+        contact_element_energy(s.c, s.qa.data(), s.qb.data(), fp, nullptr, &he, nullptr, ContactTangent::Exact);
+        EXPECT_LT((hm - hm.transpose()).norm(), 1e-12 * hm.norm());
+        if (!r.slip && gap < -1e-6) {
+          EXPECT_EQ(hm, he) << "stick beyond the quadratic start: the exact Hessian";
+        }
+        // What the majorizer adds is positive semi-definite.
+        EXPECT_GT(Eigen::SelfAdjointEigenSolver<ContactMat>(hm - he).eigenvalues().minCoeff(), -1e-9 * hm.norm());
+        // Steps of B's dofs of 0.01 to 10 elastic slips: random, and against the friction force
+        // (through stick to a reversed slip) and along the normal (pressing).
+        for (double size : {1e-8, 1e-7, 1e-6, 1e-5}) {
+          for (int k = 0; k < 5; ++k) {
+            Vec3 v = Vec3(u(rng), u(rng), u(rng)).normalized();
+            if (k == 0 && r.friction.norm() > 0) v = -r.friction.normalized();
+            if (k == 1) v = -n;
+            Eigen::VectorXd dq = Eigen::VectorXd::Zero(kContactDofs);
+            for (int a = 0; a < 3; ++a) dq.segment<3>(kElementDofs + 9 * a) = size * v;
+            const Along m = along(s, dq);
+            const double scale = (r.normal_force + fp.mu * s.c.friction_normal) * size + s.c.law.stiffness * size * size;
+            const std::string what = fmt::format("gap {:.0e} carried {} slide {:.0e} ({}) step {:.0e} #{}", gap, carried,
+                                                 slide, r.slip ? "slip" : "stick", size, k);
+            EXPECT_LE(m.change, m.majorizing + 1e-9 * scale) << what;
+            below_exact += m.change > m.exact + 1e-6 * scale;
+            // contact_step_model: the same change and the Exact model's excess.
+            const Eigen::VectorXd t = (Eigen::VectorXd(kContactDofs) << s.qa, s.qb).finished() + dq;
+            const StepModel sm =
+                contact_step_model(s.c, s.qa.data(), s.qb.data(), t.data(), t.data() + kElementDofs, fp);
+            EXPECT_NEAR(sm.change, m.change, 1e-9 * scale) << what;
+            EXPECT_NEAR(sm.excess, m.change - m.exact, 1e-9 * scale) << what;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(slipping, 0);
+  EXPECT_GT(open, 0);
+  EXPECT_GT(below_exact, 0) << "no step where the exact Hessian's model falls below the energy";
 }
 
 }  // namespace

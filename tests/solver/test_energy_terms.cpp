@@ -318,6 +318,40 @@ TEST(EnergyTerms, ContactWithFriction) {
     ASSERT_EQ(r[0].slip, ratio > 1.0);
     expect_derivatives(term, x.model, x.q, kContactScale, 1e6, ratio > 1.0 ? "slip" : "stick");
   }
+  // The tangent above the energy (ContactTangent::Majorizing, tests/contact): its friction part
+  // (what it adds beyond what it adds to the same elements without friction, the normal law's
+  // curvature k) is nothing in stick, positive semi-definite in slip; the local Hessians sum to
+  // it.
+  for (double ratio : {0.4, 3.0}) {
+    Crossing x(rng, 3);
+    x.set_gap(0, -2e-6);
+    for (int k = 0; k < 3; ++k) x.set_slip(k, ratio, rng);
+    ContactTerm term(x.model);
+    term.set_contacts(x.elements, x.friction);
+    TermHarness h(term, x.model);
+    const Eigen::MatrixXd exact = h.assemble(x.q, false, true).hessian;
+    term.set_tangent(ContactTangent::Majorizing);
+    const Eigen::MatrixXd above = h.assemble(x.q, false, true).hessian;
+    EXPECT_LT(rel_error(h.local_sum(x.q), above, 1e6), 1e-12) << ratio;
+    for (const ContactResponse& r : term.responses(x.q)) EXPECT_EQ(r.slip, ratio > 1.0);
+    FrictionParams frictionless = x.friction;
+    frictionless.mu = 0.0;
+    ContactTerm normal(x.model);
+    normal.set_contacts(x.elements, frictionless);
+    TermHarness hn(normal, x.model);
+    const Eigen::MatrixXd normal_exact = hn.assemble(x.q, false, true).hessian;
+    normal.set_tangent(ContactTangent::Majorizing);
+    const Eigen::MatrixXd normal_added = hn.assemble(x.q, false, true).hessian - normal_exact;
+    EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(normal_added).eigenvalues().minCoeff(),
+              -1e-9 * exact.norm());
+    if (ratio < 1.0) {
+      EXPECT_LT((above - exact - normal_added).norm(), 1e-12 * exact.norm());
+    } else {
+      const Eigen::MatrixXd added = above - exact - normal_added;
+      EXPECT_GT(added.norm(), 1e-3 * exact.norm());
+      EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(added).eigenvalues().minCoeff(), -1e-9 * exact.norm());
+    }
+  }
   // On the cone: the friction energy is C1 there.
   Crossing x(rng, 1);
   x.set_gap(0, -2e-6);
@@ -691,6 +725,77 @@ TEST(EnergyTerms, ContactFixedPointIsItsNormalsAndCones) {
   const FixedPointChange settled = p.update_fixed_point(moved);
   EXPECT_LT(std::max(settled.turn, settled.idle_turn), 1e-7);  // (acos near 1)
   EXPECT_EQ(settled.relative, 0.0);
+}
+
+// The solver's adaptive contact tangent (ContactTerm::mark_overshoots): a step that turns one
+// slipping element's slip back marks that element alone (its energy rose above its exact
+// model); a step that slides it further marks nothing; nor does a step that opens an open
+// element, while one that presses it in marks it. A marked element assembles the tangent
+// above its energy; the marks are saved and restored with the term's lagged state and dropped
+// with new elements.
+TEST(EnergyTerms, ContactMarksTheElementsWhoseSlipAStepTurnsBack) {
+  std::mt19937 rng(17);
+  Crossing x(rng, 2);
+  x.set_gap(0, -2e-6);
+  x.set_gap(1, -2e-6);
+  x.set_slip(0, 3.0, rng);  // slipping
+  x.set_slip(1, 0.4, rng);  // sticking
+  Problem p(x.model);
+  ContactTerm& term = dynamic_cast<ContactTerm&>(*p.terms()[1]);
+  p.set_contacts(x.elements, x.friction);
+  const std::vector<ContactResponse> r = p.contact_responses(x.q);
+  ASSERT_TRUE(r[0].slip);
+  ASSERT_FALSE(r[1].slip);
+  // Fiber "high" (nodes 3-5) moved as a whole, along element 0's friction force (its slip,
+  // continued) or against it by five elastic slips (turned back through the stick disc).
+  auto moved = [&](const Vec3& v) {
+    VecX dq = VecX::Zero(x.q.size());
+    for (int n = 3; n < 6; ++n) dq.segment<3>(9 * n) = v;
+    return dq;
+  };
+  const Vec3 along = r[0].friction.normalized();
+  const VecX further = moved(1e-6 * along), back = moved(-5.0 * x.friction.elastic_slip * along);
+  EXPECT_EQ(p.mark_overshoots(x.q, further), 0);
+  EXPECT_EQ(term.marked(), std::vector<char>({0, 0}));
+  TermHarness h(term, x.model);
+  const Eigen::MatrixXd exact = h.assemble(x.q, false, true).hessian;
+  const LaggedStates unmarked = p.save_lagged();
+  EXPECT_EQ(p.mark_overshoots(x.q, back), 1);
+  EXPECT_EQ(term.marked(), std::vector<char>({1, 0}));
+  const Eigen::MatrixXd marked = h.assemble(x.q, false, true).hessian;
+  EXPECT_GT((marked - exact).norm(), 1e-3 * exact.norm());
+  EXPECT_LT(rel_error(h.local_sum(x.q), marked, 1e6), 1e-12);
+  // Marking again adds nothing.
+  EXPECT_EQ(p.mark_overshoots(x.q, back), 0);
+  // Only element 0's tangent changed: the same as that of every element marked.
+  term.set_tangent(ContactTangent::Majorizing);
+  EXPECT_EQ(h.assemble(x.q, false, true).hessian, marked);
+  term.set_tangent(ContactTangent::Exact);
+  // Saved and restored with the lagged state; new elements start unmarked.
+  const LaggedStates saved = p.save_lagged();
+  p.restore_lagged(unmarked);
+  EXPECT_EQ(term.marked(), std::vector<char>({0, 0}));
+  p.restore_lagged(saved);
+  EXPECT_EQ(term.marked(), std::vector<char>({1, 0}));
+  p.set_contacts(x.elements, x.friction);
+  EXPECT_EQ(term.marked(), std::vector<char>({0, 0}));
+  // Without friction: an open element that a step presses in is marked (its model has no
+  // curvature, its energy rises), one that it opens is not.
+  Crossing y(rng, 1);
+  y.set_gap(0, 1e-7);
+  FrictionParams frictionless = y.friction;
+  frictionless.mu = 0.0;
+  Problem pn(y.model);
+  const ContactTerm& open = dynamic_cast<const ContactTerm&>(*pn.terms()[1]);
+  pn.set_contacts(y.elements, frictionless);
+  auto normal_step = [&](double size) {
+    VecX dq = VecX::Zero(y.q.size());
+    for (int n = 3; n < 6; ++n) dq.segment<3>(9 * n) = size * y.elements[0].normal;
+    return dq;
+  };
+  EXPECT_EQ(pn.mark_overshoots(y.q, normal_step(1e-6)), 0);
+  EXPECT_EQ(pn.mark_overshoots(y.q, normal_step(-2e-6)), 1);
+  EXPECT_EQ(open.marked(), std::vector<char>({1}));
 }
 
 TEST(EnergyTerms, ContactBoundsTheNewtonStep) {

@@ -112,6 +112,22 @@ class EnergyTerm {
     (void)dq;
     return 1.0;
   }
+  /// A Newton step dq from q that the line search shortened: the term gives the parts whose
+  /// quadratic model fell below their energy along dq a tangent that lies above it, until its
+  /// stencils change; returns how many parts it marked (0 for a term without such parts).
+  virtual Index mark_overshoots(const VecX& q, const VecX& dq) {
+    (void)q;
+    (void)dq;
+    return 0;
+  }
+  /// Developers' diagnostic of a Newton step dq from q that the line search shortened: what in
+  /// the term the quadratic model misses, beyond its total (Problem::step_energies); empty for
+  /// a term with nothing to add.
+  virtual std::string explain_step(const VecX& q, const VecX& dq) const {
+    (void)q;
+    (void)dq;
+    return {};
+  }
 };
 
 }  // namespace fibra

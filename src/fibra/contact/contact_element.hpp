@@ -63,15 +63,44 @@ struct FrictionParams {
 /// Position of particle p from the element dofs q_e (27 values).
 Vec3 particle_position(const Particle& p, const double* q_e);
 
+/// The Hessian of a contact element.
+enum class ContactTangent {
+  /// The normal law's exact second derivative; for friction, k_t and the cone held fixed: the
+  /// exact Hessian of the friction energy when the cone is frozen (on the cone, curvature only
+  /// across the trial force's direction).
+  Exact,
+  /// A quadratic model above the element's energy for every step (docs/theory/contact.md, "A
+  /// tangent above the contact energy"): the normal law's largest curvature k whatever the
+  /// penetration (open elements too), and for friction as Exact in stick, and on the cone the
+  /// across-curvature k_t mu f_n / |T| in every tangential direction, along the trial force
+  /// too. What the solver factorizes for the elements whose exact model failed.
+  Majorizing,
+  /// The exact, non-symmetric derivative of the friction force (k_t and the cone following the
+  /// normal force when they are not frozen).
+  Consistent,
+};
+
 /// Energy (normal potential plus the friction spring's, see docs/theory/contact.md), gradient
 /// and Hessian with respect to [q_A; q_B]; q_a, q_b are the current element dofs. Friction
 /// force is computed by return mapping from the element's history. The Hessian is exact for
-/// the normal part; for friction it is the symmetric approximation used by the solver, or,
-/// with `consistent`, the exact (non-symmetric) derivative of the gradient. With `accumulate`,
+/// the normal part; for friction it is the `tangent` asked for. With `accumulate`,
 /// grad and hess are added to, and only the upper 3x3 blocks of hess (block row <= block
 /// column) are written: what the assembler scatters (the fast path of Problem).
 double contact_element_energy(const ContactElement& c, const double* q_a, const double* q_b,
                               const FrictionParams& friction, ContactVec* grad, ContactMat* hess,
-                              ContactResponse* response, bool consistent = false, bool accumulate = false);
+                              ContactResponse* response, ContactTangent tangent = ContactTangent::Exact,
+                              bool accumulate = false);
+
+/// An element's energy along a step of its dofs from (q_a, q_b) to (t_a, t_b).
+struct StepModel {
+  double change = 0;  ///< the energy's change [J]
+  double slope = 0;   ///< the gradient's work along the step [J]
+  double excess = 0;  ///< the change less the Exact tangent's quadratic model [J]
+};
+/// The element's energy change along the step against its Exact quadratic model: positive
+/// excess where the model falls below the energy (a slip the step turns back, an open element
+/// the step pushes into penetration, a penetration deepened along the quadratic start).
+StepModel contact_step_model(const ContactElement& c, const double* q_a, const double* q_b, const double* t_a,
+                             const double* t_b, const FrictionParams& friction);
 
 }  // namespace fibra

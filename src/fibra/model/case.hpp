@@ -216,6 +216,11 @@ struct StepSpec {
 /// benchmarks vary them to measure what each rule does.
 struct SolverMethod {
   bool line_search = true;                ///< backtracking on stick-slip cycles and rising residuals
+  /// The contact elements' tangent (docs/theory/contact.md, "A tangent above the contact
+  /// energy"): "exact", "adaptive" (the exact Hessian, and one above the energy for the
+  /// elements whose exact model fell below it on a step the line search shortened) or
+  /// "majorizing" (above the energy for every element).
+  std::string contact_tangent = "exact";
   std::string ordering = "metis";         ///< CHOLMOD fill-reducing ordering: "metis", "amd" or "auto"
   double weave_drag = 1.0;                ///< drag per node in weave steps, relative to the contact penalty k0
   /// First proximal drag of a relax or test step, relative to k0: the weave's (the stiffest);

@@ -191,6 +191,7 @@ std::string Problem::step_energies(const VecX& q, const VecX& dq) {
     symmetric_multiply(m_pattern, h, 0.0, dq, hdq, scratch);
     out += fmt::format("   {}: change {:.4e} J, model {:.4e} J (slope {:.4e}, curvature {:.4e})\n", t->name(), e1 - e0,
                        g.dot(dq) + 0.5 * dq.dot(hdq), g.dot(dq), dq.dot(hdq));
+    out += t->explain_step(q, dq);
   }
   return out;
 }

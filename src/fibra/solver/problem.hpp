@@ -76,6 +76,18 @@ class Problem {
   /// After the minimizations of a pass converged at q: every term updates its fixed-point
   /// quantities (EnergyTerm::update_fixed_point); the largest change of each kind.
   FixedPointChange update_fixed_point(const VecX& q);
+  /// Every term's EnergyTerm::mark_overshoots for a step dq from q; the parts marked.
+  Index mark_overshoots(const VecX& q, const VecX& dq) {
+    Index marked = 0;
+    for (EnergyTerm* t : m_terms) marked += t->mark_overshoots(q, dq);
+    return marked;
+  }
+  /// The contact elements marked for the tangent above their energy, and to put them back
+  /// (ContactTerm::marked, set_marked).
+  const std::vector<char>& marked_contacts() const { return m_contact.marked(); }
+  void set_marked_contacts(std::vector<char> marked) { m_contact.set_marked(std::move(marked)); }
+  /// The contact elements' Hessian (ContactTerm::set_tangent).
+  void set_contact_tangent(ContactTangent tangent) { m_contact.set_tangent(tangent); }
   /// The rule the contact term updates its normals with (ContactTerm::set_normal_rule).
   void set_normal_rule(const ContactManager* manager) { m_contact.set_normal_rule(manager); }
   /// Every term's lagged state (EnergyTerm::save).

@@ -23,8 +23,8 @@ namespace {
 // mark, and (from version 3) the CRC-32 of every byte before it. A truncated file is shorter
 // than its length, a damaged one fails its checksum.
 constexpr char kMagic[] = "fibra state\n";
-constexpr std::uint32_t kVersion = 6;  // 2: test_drag; 3: kind, length, checksum, checkpoints; 4: settling_residual;
-                                       // 5: project_hessians; 6: indefinite_iterations
+constexpr std::uint32_t kVersion = 7;  // 2: test_drag; 3: kind, length, checksum, checkpoints; 4: settling_residual;
+                                       // 5: project_hessians; 6: indefinite_iterations; 7: the factor's marked contacts
 constexpr char kEnd[] = "end of state\n";
 constexpr std::size_t kMagicSize = sizeof(kMagic) - 1;
 constexpr std::size_t kEndSize = sizeof(kEnd) - 1;
@@ -326,6 +326,8 @@ void put_progress(Out& o, const SolverProgress& p) {
   o.put(static_cast<std::uint64_t>(f.fixed.size()));
   o.bytes(f.fixed.data(), f.fixed.size());
   o.put(f.shift);
+  o.put(static_cast<std::uint64_t>(f.marked.size()));
+  o.bytes(f.marked.data(), f.marked.size());
 }
 
 SolverProgress get_progress(In& in, const ModelFingerprint& model, Index nodes, std::uint32_t version) {
@@ -397,6 +399,12 @@ SolverProgress get_progress(In& in, const ModelFingerprint& model, Index nodes, 
   f.fixed.resize(in.count(dofs, 1));
   in.read(f.fixed.data(), f.fixed.size());
   f.shift = in.get<double>();
+  if (version >= 7) {
+    f.marked.resize(in.count(f.contacts.size(), 1));
+    in.read(f.marked.data(), f.marked.size());
+    if (!f.marked.empty() && f.marked.size() != f.contacts.size())
+      in.bad("its factorization's marked contacts do not match its contacts: the file is corrupt");
+  }
   if (f.q.size() != model.dofs || f.fixed.size() != dofs || !std::isfinite(f.shift) || f.shift < 0.0 ||
       !(f.drag.stiffness >= 0.0 && std::isfinite(f.drag.stiffness)) ||
       (f.drag.stiffness > 0.0 && f.drag.anchor.size() != model.dofs))

@@ -88,6 +88,7 @@ struct FactorSource {
   VecX q;                         ///< the state it was assembled at
   std::vector<double> bodies;     ///< BodySystem::snapshot() then
   std::vector<ContactElement> contacts;
+  std::vector<char> marked;       ///< per contact, 1 with the tangent above its energy
   FrictionParams friction;
   /// The drag (a checkpoint keeps a record only with the position weight 1: a release's
   /// factorizations, without the drag on the positions, are never reused,

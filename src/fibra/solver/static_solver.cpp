@@ -121,6 +121,11 @@ StaticSolver::StaticSolver(const Case& c, const Model& model, std::unique_ptr<Bo
   if (c.contact.enabled) {
     m_contact = std::make_unique<ContactManager>(model, c.contact);
     m_problem->set_normal_rule(m_contact.get());
+    const std::string& tangent = c.solver.method.contact_tangent;
+    if (tangent != "adaptive" && tangent != "exact" && tangent != "majorizing")
+      throw std::invalid_argument("SolverMethod::contact_tangent: \"" + tangent +
+                                  "\" (expected \"adaptive\", \"exact\" or \"majorizing\")");
+    m_problem->set_contact_tangent(tangent == "majorizing" ? ContactTangent::Majorizing : ContactTangent::Exact);
     m_contact_loop = std::make_unique<ContactLoop>(model, *m_contact, *m_problem);
     double rmin = std::numeric_limits<double>::infinity();
     for (const Fiber& f : model.fibers)
@@ -726,6 +731,13 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       if (alpha < 1.0 && debug_newton())
         fmt::print(stderr, "  it {:2d} step shortened to {:.3f}; the full step's energy by term:\n{}", iterations, alpha,
                    m_problem->step_energies(m_q, dq));
+      // The contact elements whose exact model fell below their energy along the full step get
+      // a tangent above it (docs/theory/contact.md, "A tangent above the contact energy").
+      if (alpha < 1.0 && opt.method.contact_tangent == "adaptive") {
+        const Index marked = m_problem->mark_overshoots(m_q, dq);
+        if (debug_newton() && marked > 0)
+          fmt::print(stderr, "  it {:2d} {} contact elements take the tangent above their energy\n", iterations, marked);
+      }
       if (alpha < 1.0 && !shortened) {
         shortened = true;
         ++m_stats.searched_solves;
@@ -877,6 +889,7 @@ void StaticSolver::record_factor_source(double shift) {
   f.q = m_q;
   f.bodies = m_bodies ? m_bodies->snapshot() : std::vector<double>{};
   f.contacts = m_problem->contacts();
+  f.marked = m_problem->marked_contacts();
   f.friction = m_problem->friction();
   f.drag = m_problem->drag_settings();
   f.moments = m_problem->moments();
@@ -893,6 +906,7 @@ void StaticSolver::refactorize(const FactorSource& f) {
   // The problem as the factorization saw it (a checkpoint's record of it).
   if (m_bodies) m_bodies->restore(f.bodies);
   if (m_contact && m_problem->set_contacts(f.contacts, f.friction)) pattern_changed();
+  if (m_contact && !f.marked.empty()) m_problem->set_marked_contacts(f.marked);
   m_problem->set_drag(f.drag);
   m_problem->moments() = f.moments;
   m_problem->fixed() = f.fixed;

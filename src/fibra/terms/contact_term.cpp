@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
+
+#include <fmt/format.h>
 
 namespace fibra {
 
@@ -32,6 +35,7 @@ bool ContactTerm::set_contacts(std::vector<ContactElement> contacts, const Frict
   begin.push_back(static_cast<Index>(contacts.size()));
   const bool changed = pairs.groups != m_pairs.groups;
   m_contacts = std::move(contacts);
+  m_marked.assign(m_contacts.size(), 0);
   m_pair_begin = std::move(begin);
   if (changed) {
     pairs.colorize(m_model.num_nodes());
@@ -46,6 +50,7 @@ struct ContactState final : LaggedState {
   std::vector<ContactElement> contacts;
   FrictionParams friction;
   std::vector<ContactResponse> solution;
+  std::vector<char> marked;
 };
 
 }  // namespace
@@ -55,13 +60,16 @@ std::unique_ptr<LaggedState> ContactTerm::save() const {
   s->contacts = m_contacts;
   s->friction = m_friction;
   s->solution = m_solution;
+  s->marked = m_marked;
   return s;
 }
 
 bool ContactTerm::restore(const LaggedState& state) {
   const auto& s = dynamic_cast<const ContactState&>(state);
   m_solution = s.solution;
-  return set_contacts(s.contacts, s.friction);
+  const bool changed = set_contacts(s.contacts, s.friction);
+  m_marked = s.marked;
+  return changed;
 }
 
 void ContactTerm::commit(VecX& q) {
@@ -122,7 +130,7 @@ double ContactTerm::assemble(const VecX& q, const AssemblyTarget& target) {
           const ContactElement& c = m_contacts[k];
           e += contact_element_energy(c, q.data() + model.elements[c.a.element].first_dof,
                                       q.data() + model.elements[c.b.element].first_dof, m_friction, g, h, nullptr,
-                                      false, true);
+                                      tangent(k), true);
         }
         // Pairs within the detection distance that do not touch (and carry no friction) add
         // nothing: most of them in a tow, where every neighbour is a candidate.
@@ -137,10 +145,89 @@ Eigen::MatrixXd ContactTerm::local_hessian(Index k, const VecX& q) const {
   for (Index e = m_pair_begin[k]; e < m_pair_begin[k + 1]; ++e) {
     const ContactElement& c = m_contacts[e];
     contact_element_energy(c, q.data() + m_model.elements[c.a.element].first_dof,
-                           q.data() + m_model.elements[c.b.element].first_dof, m_friction, &g, &h, nullptr);
+                           q.data() + m_model.elements[c.b.element].first_dof, m_friction, &g, &h, nullptr, tangent(e));
     sum += h;
   }
   return sum;
+}
+
+Index ContactTerm::mark_overshoots(const VecX& q, const VecX& dq) {
+  if (m_tangent == ContactTangent::Majorizing) return 0;
+  const VecX trial = q + dq;
+  Index marked = 0;
+  for (size_t k = 0; k < m_contacts.size(); ++k) {
+    if (m_marked[k]) continue;
+    const ContactElement& c = m_contacts[k];
+    const Index da = m_model.elements[c.a.element].first_dof, db = m_model.elements[c.b.element].first_dof;
+    const StepModel m =
+        contact_step_model(c, q.data() + da, q.data() + db, trial.data() + da, trial.data() + db, m_friction);
+    if (m.excess > 0.1 * (std::abs(m.slope) + std::abs(m.change))) {
+      m_marked[k] = 1;
+      ++marked;
+    }
+  }
+  return marked;
+}
+
+std::string ContactTerm::explain_step(const VecX& q, const VecX& dq) const {
+  if (m_contacts.empty()) return {};
+  const VecX trial = q + dq;
+  const FrictionParams none;
+  struct Surprise {
+    double normal = 0, friction = 0;
+    size_t element = 0;
+    ContactResponse start, end;
+  };
+  std::vector<Surprise> worst;
+  double change_n = 0, model_n = 0, change_t = 0, model_t = 0;
+  Index closing = 0, to_slip = 0, to_stick = 0, reversed = 0;
+  ContactVec g, gn, dl;
+  ContactMat h, hn;
+  for (size_t k = 0; k < m_contacts.size(); ++k) {
+    const ContactElement& c = m_contacts[k];
+    const Index da = m_model.elements[c.a.element].first_dof, db = m_model.elements[c.b.element].first_dof;
+    dl << dq.segment<kElementDofs>(da), dq.segment<kElementDofs>(db);
+    Surprise s;
+    s.element = k;
+    const ContactTangent kind = tangent(static_cast<Index>(k));
+    const double e0 = contact_element_energy(c, q.data() + da, q.data() + db, m_friction, &g, &h, &s.start, kind);
+    const double e1 =
+        contact_element_energy(c, trial.data() + da, trial.data() + db, m_friction, nullptr, nullptr, &s.end);
+    const double n0 = contact_element_energy(c, q.data() + da, q.data() + db, none, &gn, &hn, nullptr, kind);
+    const double n1 = contact_element_energy(c, trial.data() + da, trial.data() + db, none, nullptr, nullptr, nullptr);
+    const double mn = gn.dot(dl) + 0.5 * dl.dot(hn * dl);
+    const double mt = g.dot(dl) + 0.5 * dl.dot(h * dl) - mn;
+    change_n += n1 - n0;
+    model_n += mn;
+    change_t += (e1 - e0) - (n1 - n0);
+    model_t += mt;
+    s.normal = (n1 - n0) - mn;
+    s.friction = (e1 - e0) - (n1 - n0) - mt;
+    closing += s.start.gap >= 0.0 && s.end.gap < 0.0;
+    to_slip += !s.start.slip && s.end.slip;
+    to_stick += s.start.slip && !s.end.slip;
+    reversed += s.start.friction.dot(s.end.friction) < 0.0;
+    worst.push_back(s);
+  }
+  constexpr size_t kShown = 6;
+  const auto larger = [](const Surprise& x, const Surprise& y) { return x.normal + x.friction > y.normal + y.friction; };
+  std::partial_sort(worst.begin(), worst.begin() + static_cast<std::ptrdiff_t>(std::min(kShown, worst.size())),
+                    worst.end(), larger);
+  std::string out = fmt::format(
+      "     normal: change {:.4e} J, model {:.4e} J; friction: change {:.4e} J, model {:.4e} J\n"
+      "     of {} elements: {} close from a gap, {} stick to slip, {} slip to stick, {} friction forces reversed\n",
+      change_n, model_n, change_t, model_t, m_contacts.size(), closing, to_slip, to_stick, reversed);
+  for (size_t i = 0; i < std::min(kShown, worst.size()); ++i) {
+    const Surprise& s = worst[i];
+    const ContactElement& c = m_contacts[s.element];
+    out += fmt::format(
+        "     element {} (beam elements {}, {}): beyond the model normal {:.3e} J, friction {:.3e} J; gap {:.3e} -> "
+        "{:.3e} m (p_r {:.1e}); normal force {:.3e} N (cone {:.3e}); friction {:.3e} N {} -> {:.3e} N {}\n",
+        s.element, c.a.element, c.b.element, s.normal, s.friction, s.start.gap, s.end.gap, c.law.regularization,
+        s.start.normal_force, c.friction_normal, s.start.friction.norm(), s.start.slip ? "slip" : "stick",
+        s.end.friction.norm(), s.end.slip ? "slip" : "stick");
+  }
+  return out;
 }
 
 std::vector<ContactResponse> ContactTerm::responses(const VecX& q) const {

@@ -8,6 +8,7 @@
 /// (update_fixed_point). The term also bounds a Newton step: no
 /// point moves further than the step limit, so that a fiber nothing holds yet does not jump
 /// through its neighbours.
+#include <stdexcept>
 #include <vector>
 
 #include "fibra/assembly/energy_term.hpp"
@@ -29,6 +30,22 @@ class ContactTerm final : public EnergyTerm {
   std::span<const Index> local_groups(Index k) const override { return m_pairs.stencil(k); }
   /// The sum of the pair's elements' Hessians, friction included.
   Eigen::MatrixXd local_hessian(Index k, const VecX& q) const override;
+  /// The elements' Hessian in assemble() and local_hessian(): Exact (the default) or
+  /// Majorizing, for every element; with Exact, the elements mark_overshoots() marked still
+  /// take Majorizing.
+  void set_tangent(ContactTangent tangent) { m_tangent = tangent; }
+  /// Marks the elements whose energy rose above their Exact model along dq by more than a tenth
+  /// of the sum of the change's and the slope's sizes (contact_step_model): a slip the step
+  /// turned back, an open element pushed into penetration. They keep the Majorizing tangent
+  /// until the next set_contacts.
+  Index mark_overshoots(const VecX& q, const VecX& dq) override;
+  /// Per element (same order as contacts()), 1 where mark_overshoots marked it.
+  const std::vector<char>& marked() const { return m_marked; }
+  /// Puts back what marked() returned for the same elements.
+  void set_marked(std::vector<char> marked) {
+    if (marked.size() != m_contacts.size()) throw std::logic_error("ContactTerm::set_marked: not one flag per element");
+    m_marked = std::move(marked);
+  }
 
   /// Replaces the contact elements (each oriented so that a.element < b.element) and the
   /// friction parameters; true when the element pairs changed (the pattern must be rebuilt).
@@ -68,8 +85,14 @@ class ContactTerm final : public EnergyTerm {
   /// is fresh any more.
   void commit(VecX& q) override;
   double step_bound(const VecX& q, const VecX& dq) const override;
+  /// The normal and friction parts' changes against their models, and the elements whose
+  /// change exceeds their model most, with their penetration and stick or slip at both ends.
+  std::string explain_step(const VecX& q, const VecX& dq) const override;
 
  private:
+  ContactTangent tangent(Index element) const {
+    return m_marked[static_cast<size_t>(element)] ? ContactTangent::Majorizing : m_tangent;
+  }
   /// Each cone's normal force at q; returns the largest change relative to the largest force.
   double freeze_cones(const VecX& q);
   const Model& m_model;
@@ -79,6 +102,8 @@ class ContactTerm final : public EnergyTerm {
   std::vector<ContactElement> m_contacts;
   FrictionParams m_friction;
   std::vector<ContactResponse> m_solution;  // responses at the last minimization's solution
+  ContactTangent m_tangent = ContactTangent::Exact;
+  std::vector<char> m_marked;  // per element: Majorizing (mark_overshoots)
   double m_max_move = 0;                    // step limit [m]; 0 = none
   VecX m_length_scale;                      // per dof: length of a unit of the dof [m]
   std::vector<double> m_energy_buffer;
