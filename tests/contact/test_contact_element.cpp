@@ -299,12 +299,20 @@ TEST(ContactElement, MajorizingTangentLiesAboveTheEnergy) {
                                                  slide, r.slip ? "slip" : "stick", size, k);
             EXPECT_LE(m.change, m.majorizing + 1e-9 * scale) << what;
             below_exact += m.change > m.exact + 1e-6 * scale;
-            // contact_step_model: the same change and the Exact model's excess.
+            // contact_step_model: the same change and each tangent's excess, its normal part
+            // that of the element without friction.
             const Eigen::VectorXd t = (Eigen::VectorXd(kContactDofs) << s.qa, s.qb).finished() + dq;
-            const StepModel sm =
-                contact_step_model(s.c, s.qa.data(), s.qb.data(), t.data(), t.data() + kElementDofs, fp);
-            EXPECT_NEAR(sm.change, m.change, 1e-9 * scale) << what;
-            EXPECT_NEAR(sm.excess, m.change - m.exact, 1e-9 * scale) << what;
+            for (ContactTangent tangent : {ContactTangent::Exact, ContactTangent::Majorizing}) {
+              const StepModel sm =
+                  contact_step_model(s.c, s.qa.data(), s.qb.data(), t.data(), t.data() + kElementDofs, fp, tangent);
+              const double model = tangent == ContactTangent::Exact ? m.exact : m.majorizing;
+              EXPECT_NEAR(sm.change(), m.change, 1e-9 * scale) << what;
+              EXPECT_NEAR(sm.excess(), m.change - model, 1e-9 * scale) << what;
+              const StepModel sn = contact_step_model(s.c, s.qa.data(), s.qb.data(), t.data(), t.data() + kElementDofs,
+                                                      FrictionParams{}, tangent);
+              EXPECT_EQ(sn.friction_change, 0.0);
+              EXPECT_NEAR(sn.normal_change - sn.normal_model, sm.normal_change - sm.normal_model, 1e-12 * scale);
+            }
           }
         }
       }

@@ -23,6 +23,8 @@ struct FrictionPart {
   FrictionState state;
   double kt = 0;       // stick stiffness mu f_n / delta (0: no friction)
   double fn_cone = 0;  // the normal force that sets the cone
+  Mat3 proj;           // onto the tangent plane, I - N N^T
+  Vec3 du;             // the tangential slip since the last converged state
 };
 
 FrictionPart friction_part(const ContactElement& c, const Vec3& d, double fn, const FrictionParams& friction) {
@@ -31,8 +33,8 @@ FrictionPart friction_part(const ContactElement& c, const Vec3& d, double fn, co
   // stick response a gradient; slip uses the cone-projected force.
   FrictionPart f;
   const Vec3& nrm = c.normal;
-  const Mat3 proj = Mat3::Identity() - nrm * nrm.transpose();
-  const Vec3 du = proj * (d - c.separation_previous);
+  f.proj = Mat3::Identity() - nrm * nrm.transpose();
+  f.du = f.proj * (d - c.separation_previous);
   f.fn_cone = c.friction_normal >= 0.0 ? c.friction_normal : fn;
   // Frozen, the spring acts even on an element that opens during the solve (the energy stays a
   // C1 convex function of the slip); the next freeze, at zero force, removes it.
@@ -43,13 +45,61 @@ FrictionPart friction_part(const ContactElement& c, const Vec3& d, double fn, co
     // f_tr = P f_prev + kt du, (|f_tr|^2 - |P f_prev|^2) / (2 kt) in stick and
     // (L^2 - |P f_prev|^2 + 2 L (|f_tr| - L)) / (2 kt) on the cone: C1 across the cone's edge, and its
     // gradient is the returned force (f_prev included, unlike f . du).
-    const Vec3 fprev = proj * c.friction_previous;
+    const Vec3 fprev = f.proj * c.friction_previous;
     const double limit = friction.mu * f.fn_cone;
     const double fp = fprev.norm();
     f.energy = f.state.slip ? ((limit - fp) * (limit + fp) + 2.0 * limit * (f.state.trial_norm - limit)) / (2.0 * f.kt)
-                            : fprev.dot(du) + 0.5 * f.kt * du.squaredNorm();
+                            : fprev.dot(f.du) + 0.5 * f.kt * f.du.squaredNorm();
   }
   return f;
+}
+
+/// The `tangent`'s second derivative of the element's energy with respect to the separation
+/// d = x_B - x_A at penetration p: the normal law's curvature along N and the friction part's
+/// 3 x 3 block (non-symmetric for Consistent).
+struct SeparationStiffness {
+  double normal = 0;
+  Mat3 friction = Mat3::Zero();
+};
+
+SeparationStiffness separation_stiffness(const ContactElement& c, double p, const FrictionPart& part,
+                                         const FrictionParams& friction, ContactTangent tangent) {
+  SeparationStiffness k;
+  // Majorizing: the law's curvature is at most k (beyond the quadratic start), so the
+  // quadratic of curvature k through the energy and force at p lies above the potential.
+  k.normal = tangent == ContactTangent::Majorizing ? c.law.stiffness : c.law.stiffness_at(p);
+  const double kt = part.kt;
+  if (kt <= 0.0) return k;
+  const FrictionState& fr = part.state;
+  const Mat3& proj = part.proj;
+  const Vec3 t = fr.force.normalized();
+  // On the cone, the curvature across the trial force's direction.
+  const double across = fr.slip ? kt * friction.mu * part.fn_cone / fr.trial_norm : 0.0;
+  if (!fr.slip) {
+    if (tangent != ContactTangent::Consistent) k.friction = kt * proj;
+  } else if (tangent == ContactTangent::Exact) {
+    // kt held fixed: in slip only the turning of the force with the trial direction (exact
+    // when the cone is frozen).
+    k.friction = across * (proj - t * t.transpose());
+  } else if (tangent == ContactTangent::Majorizing) {
+    // The energy on the cone is L |T| / kt + const, T linear in the slip: a function of
+    // s = |T|^2 that is concave (C1 through the stick disc, where it is s / (2 kt)), so
+    // its tangent in s, a quadratic in T of curvature L / (kt |T|), lies above it.
+    k.friction = across * proj;
+  }
+  if (tangent == ContactTangent::Consistent) {
+    // Exact: kt = mu fn / delta depends on the gap, d fn / d d = -fn' N (not when frozen).
+    const bool frozen = c.friction_normal >= 0.0;
+    const Vec3 dfn = frozen ? Vec3::Zero() : Vec3(-c.law.stiffness_at(p) * c.normal);
+    const Mat3 dtrial = kt * proj + (friction.mu / friction.elastic_slip) * part.du * dfn.transpose();
+    if (!fr.slip) {
+      k.friction = dtrial;
+    } else {
+      k.friction = friction.mu * t * dfn.transpose() +
+                   (friction.mu * part.fn_cone / fr.trial_norm) * (Mat3::Identity() - t * t.transpose()) * dtrial;
+    }
+  }
+  return k;
 }
 
 }  // namespace
@@ -64,12 +114,8 @@ double contact_element_energy(const ContactElement& c, const double* q_a, const 
   const double fn = c.law.force(p);
   double energy = c.law.potential(p);
 
-  const Mat3 proj = Mat3::Identity() - nrm * nrm.transpose();
-  const bool frozen = c.friction_normal >= 0.0;
   const FrictionPart part = friction_part(c, d, fn, friction);
   const FrictionState& fr = part.state;
-  const double kt = part.kt, fn_cone = part.fn_cone;
-  const Vec3 du = proj * (d - c.separation_previous);
   energy += part.energy;
   if (response) {
     response->gap = gap;
@@ -102,36 +148,8 @@ double contact_element_energy(const ContactElement& c, const double* q_a, const 
       for (int m = 0; m < 18; ++m) grad->segment<3>(3 * m) = coef[m] * force_d;
   }
   if (hess) {
-    // Majorizing: the law's curvature is at most k (beyond the quadratic start), so the
-    // quadratic of curvature k through the energy and force at p lies above the potential.
-    const double kn = tangent == ContactTangent::Majorizing ? c.law.stiffness : c.law.stiffness_at(p);
-    Mat3 k3 = kn * (nrm * nrm.transpose());
-    if (kt > 0.0) {
-      const Vec3 t = fr.force.normalized();
-      if (!fr.slip) {
-        if (tangent != ContactTangent::Consistent) k3 += kt * proj;
-      } else if (tangent == ContactTangent::Exact) {
-        // kt held fixed: in slip only the turning of the force with the trial direction (exact
-        // when the cone is frozen).
-        k3 += (kt * friction.mu * fn_cone / fr.trial_norm) * (proj - t * t.transpose());
-      } else if (tangent == ContactTangent::Majorizing) {
-        // The energy on the cone is L |T| / kt + const, T linear in the slip: a function of
-        // s = |T|^2 that is concave (C1 through the stick disc, where it is s / (2 kt)), so
-        // its tangent in s, a quadratic in T of curvature L / (kt |T|), lies above it.
-        k3 += (kt * friction.mu * fn_cone / fr.trial_norm) * proj;
-      }
-      if (tangent == ContactTangent::Consistent) {
-        // Exact: kt = mu fn / delta depends on the gap, d fn / d d = -fn' N (not when frozen).
-        const Vec3 dfn = frozen ? Vec3::Zero() : Vec3(-c.law.stiffness_at(p) * nrm);
-        const Mat3 dtrial = kt * proj + (friction.mu / friction.elastic_slip) * du * dfn.transpose();
-        if (!fr.slip) {
-          k3 += dtrial;
-        } else {
-          k3 += friction.mu * t * dfn.transpose() +
-                (friction.mu * fn_cone / fr.trial_norm) * (Mat3::Identity() - t * t.transpose()) * dtrial;
-        }
-      }
-    }
+    const SeparationStiffness k = separation_stiffness(c, p, part, friction, tangent);
+    const Mat3 k3 = k.normal * (nrm * nrm.transpose()) + k.friction;
     if (accumulate) {
       for (int n = 0; n < 18; ++n)
         for (int m = 0; m <= n; ++m) hess->block<3, 3>(3 * m, 3 * n) += (coef[m] * coef[n]) * k3;
@@ -144,30 +162,25 @@ double contact_element_energy(const ContactElement& c, const double* q_a, const 
 }
 
 StepModel contact_step_model(const ContactElement& c, const double* q_a, const double* q_b, const double* t_a,
-                             const double* t_b, const FrictionParams& friction) {
+                             const double* t_b, const FrictionParams& friction, ContactTangent tangent) {
   const Vec3 d0 = particle_position(c.b, q_b) - particle_position(c.a, q_a);
   const Vec3 d1 = particle_position(c.b, t_b) - particle_position(c.a, t_a);
   const double p0 = -(d0.dot(c.normal) + c.offset), p1 = -(d1.dot(c.normal) + c.offset);
-  const FrictionPart f0 = friction_part(c, d0, c.law.force(p0), friction);
-  const FrictionPart f1 = friction_part(c, d1, c.law.force(p1), friction);
+  const double fn0 = c.law.force(p0), fn1 = c.law.force(p1);
+  const FrictionPart f0 = friction_part(c, d0, fn0, friction);
+  const FrictionPart f1 = friction_part(c, d1, fn1, friction);
+  // d is linear in the element's dofs: the model along the step is that of d's change.
   const Vec3 step = d1 - d0;
-  // The Exact tangent's model: the law's stiffness along the normal; k_t P in stick,
-  // k_t L / |T| (P - t t^T) on the cone.
   const double dp = p1 - p0;
-  double curvature = c.law.stiffness_at(p0) * dp * dp;
-  if (f0.kt > 0.0) {
-    const Vec3 across = step - step.dot(c.normal) * c.normal;
-    if (!f0.state.slip) {
-      curvature += f0.kt * across.squaredNorm();
-    } else {
-      const double along = across.dot(f0.state.force.normalized());
-      curvature += f0.kt * friction.mu * f0.fn_cone / f0.state.trial_norm * (across.squaredNorm() - along * along);
-    }
-  }
+  const SeparationStiffness k = separation_stiffness(c, p0, f0, friction, tangent);
   StepModel m;
-  m.change = (c.law.potential(p1) - c.law.potential(p0)) + (f1.energy - f0.energy);
-  m.slope = c.law.force(p0) * dp + f0.state.force.dot(step);
-  m.excess = m.change - (m.slope + 0.5 * curvature);
+  m.normal_change = c.law.potential(p1) - c.law.potential(p0);
+  m.normal_model = fn0 * dp + 0.5 * k.normal * dp * dp;
+  m.friction_change = f1.energy - f0.energy;
+  m.friction_model = f0.state.force.dot(step) + 0.5 * step.dot(k.friction * step);
+  m.slope = fn0 * dp + f0.state.force.dot(step);
+  m.start = {-p0, fn0, f0.state.force, f0.state.slip};
+  m.end = {-p1, fn1, f1.state.force, f1.state.slip};
   return m;
 }
 

@@ -91,16 +91,24 @@ double contact_element_energy(const ContactElement& c, const double* q_a, const 
                               ContactResponse* response, ContactTangent tangent = ContactTangent::Exact,
                               bool accumulate = false);
 
-/// An element's energy along a step of its dofs from (q_a, q_b) to (t_a, t_b).
+/// An element's energy along a step of its dofs, against a tangent's quadratic model, split
+/// into the normal law's part and the friction spring's.
 struct StepModel {
-  double change = 0;  ///< the energy's change [J]
-  double slope = 0;   ///< the gradient's work along the step [J]
-  double excess = 0;  ///< the change less the Exact tangent's quadratic model [J]
+  double normal_change = 0, normal_model = 0;      ///< the normal law's change and its model [J]
+  double friction_change = 0, friction_model = 0;  ///< the friction spring's [J]
+  double slope = 0;                                ///< the gradient's work along the step [J]
+  ContactResponse start, end;                      ///< the element before and after the step
+  double change() const { return normal_change + friction_change; }
+  /// The change less the model: positive where the model falls below the energy (with the
+  /// Exact tangent: a slip the step turns back, an open element the step pushes into
+  /// penetration, a penetration deepened along the quadratic start).
+  double excess() const { return change() - (normal_model + friction_model); }
 };
-/// The element's energy change along the step against its Exact quadratic model: positive
-/// excess where the model falls below the energy (a slip the step turns back, an open element
-/// the step pushes into penetration, a penetration deepened along the quadratic start).
+/// The element's energy change along the step from (q_a, q_b) to (t_a, t_b) against the
+/// quadratic model of `tangent` at the start: the same model as contact_element_energy's
+/// gradient and Hessian give, without forming them.
 StepModel contact_step_model(const ContactElement& c, const double* q_a, const double* q_b, const double* t_a,
-                             const double* t_b, const FrictionParams& friction);
+                             const double* t_b, const FrictionParams& friction,
+                             ContactTangent tangent = ContactTangent::Exact);
 
 }  // namespace fibra

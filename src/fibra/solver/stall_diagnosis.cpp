@@ -11,9 +11,9 @@ namespace {
 // A unit direction written with two decimals, its largest component positive (a mode's sign
 // is arbitrary).
 std::string direction_text(Vec3 v) {
-  Index k = 0;
-  v.cwiseAbs().maxCoeff(&k);
-  if (v[k] < 0) v = -v;
+  Index largest = 0;
+  v.cwiseAbs().maxCoeff(&largest);
+  if (v[largest] < 0) v = -v;
   v /= v.norm();
   for (int k = 0; k < 3; ++k)
     if (std::abs(v[k]) < 0.005) v[k] = 0.0;  // no "-0.00"

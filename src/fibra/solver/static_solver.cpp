@@ -126,6 +126,7 @@ StaticSolver::StaticSolver(const Case& c, const Model& model, std::unique_ptr<Bo
       throw std::invalid_argument("SolverMethod::contact_tangent: \"" + tangent +
                                   "\" (expected \"adaptive\", \"exact\" or \"majorizing\")");
     m_problem->set_contact_tangent(tangent == "majorizing" ? ContactTangent::Majorizing : ContactTangent::Exact);
+    m_adaptive_tangent = tangent == "adaptive";
     m_contact_loop = std::make_unique<ContactLoop>(model, *m_contact, *m_problem);
     double rmin = std::numeric_limits<double>::infinity();
     for (const Fiber& f : model.fibers)
@@ -733,7 +734,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
                    m_problem->step_energies(m_q, dq));
       // The contact elements whose exact model fell below their energy along the full step get
       // a tangent above it (docs/theory/contact.md, "A tangent above the contact energy").
-      if (alpha < 1.0 && opt.method.contact_tangent == "adaptive") {
+      if (alpha < 1.0 && m_adaptive_tangent) {
         const Index marked = m_problem->mark_overshoots(m_q, dq);
         if (debug_newton() && marked > 0)
           fmt::print(stderr, "  it {:2d} {} contact elements take the tangent above their energy\n", iterations, marked);

@@ -216,6 +216,7 @@ class StaticSolver {
   std::optional<TestEdges> m_edges;  // the fabric's edge bodies (tests), nullopt without them
   double m_test_drag = 0;        // drag that applied the last test level, of this run or its start's [N/m]
   bool m_reuse_factor = false;    // the last factorization may precondition the next Newton solve
+  bool m_adaptive_tangent = false;  // SolverMethod::contact_tangent is "adaptive": shortened steps mark contact elements
   double m_last_shift = 0;        // last shift a factorization needed, relative to its tangent's mean diagonal
   int m_krylov_budget = 20;       // CG iterations a factorization is worth (krylov_budget())
   int m_cg_excess = 0;            // CG iterations since the last factorization beyond the first solve's, summed

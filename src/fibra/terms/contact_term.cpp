@@ -161,7 +161,7 @@ Index ContactTerm::mark_overshoots(const VecX& q, const VecX& dq) {
     const Index da = m_model.elements[c.a.element].first_dof, db = m_model.elements[c.b.element].first_dof;
     const StepModel m =
         contact_step_model(c, q.data() + da, q.data() + db, trial.data() + da, trial.data() + db, m_friction);
-    if (m.excess > 0.1 * (std::abs(m.slope) + std::abs(m.change))) {
+    if (m.excess() > 0.1 * (std::abs(m.slope) + std::abs(m.change()))) {
       m_marked[k] = 1;
       ++marked;
     }
@@ -172,45 +172,31 @@ Index ContactTerm::mark_overshoots(const VecX& q, const VecX& dq) {
 std::string ContactTerm::explain_step(const VecX& q, const VecX& dq) const {
   if (m_contacts.empty()) return {};
   const VecX trial = q + dq;
-  const FrictionParams none;
   struct Surprise {
-    double normal = 0, friction = 0;
     size_t element = 0;
-    ContactResponse start, end;
+    StepModel step;
+    double excess() const { return step.excess(); }
   };
   std::vector<Surprise> worst;
   double change_n = 0, model_n = 0, change_t = 0, model_t = 0;
   Index closing = 0, to_slip = 0, to_stick = 0, reversed = 0;
-  ContactVec g, gn, dl;
-  ContactMat h, hn;
   for (size_t k = 0; k < m_contacts.size(); ++k) {
     const ContactElement& c = m_contacts[k];
     const Index da = m_model.elements[c.a.element].first_dof, db = m_model.elements[c.b.element].first_dof;
-    dl << dq.segment<kElementDofs>(da), dq.segment<kElementDofs>(db);
-    Surprise s;
-    s.element = k;
-    const ContactTangent kind = tangent(static_cast<Index>(k));
-    const double e0 = contact_element_energy(c, q.data() + da, q.data() + db, m_friction, &g, &h, &s.start, kind);
-    const double e1 =
-        contact_element_energy(c, trial.data() + da, trial.data() + db, m_friction, nullptr, nullptr, &s.end);
-    const double n0 = contact_element_energy(c, q.data() + da, q.data() + db, none, &gn, &hn, nullptr, kind);
-    const double n1 = contact_element_energy(c, trial.data() + da, trial.data() + db, none, nullptr, nullptr, nullptr);
-    const double mn = gn.dot(dl) + 0.5 * dl.dot(hn * dl);
-    const double mt = g.dot(dl) + 0.5 * dl.dot(h * dl) - mn;
-    change_n += n1 - n0;
-    model_n += mn;
-    change_t += (e1 - e0) - (n1 - n0);
-    model_t += mt;
-    s.normal = (n1 - n0) - mn;
-    s.friction = (e1 - e0) - (n1 - n0) - mt;
-    closing += s.start.gap >= 0.0 && s.end.gap < 0.0;
-    to_slip += !s.start.slip && s.end.slip;
-    to_stick += s.start.slip && !s.end.slip;
-    reversed += s.start.friction.dot(s.end.friction) < 0.0;
-    worst.push_back(s);
+    const StepModel m = contact_step_model(c, q.data() + da, q.data() + db, trial.data() + da, trial.data() + db,
+                                           m_friction, tangent(static_cast<Index>(k)));
+    change_n += m.normal_change;
+    model_n += m.normal_model;
+    change_t += m.friction_change;
+    model_t += m.friction_model;
+    closing += m.start.gap >= 0.0 && m.end.gap < 0.0;
+    to_slip += !m.start.slip && m.end.slip;
+    to_stick += m.start.slip && !m.end.slip;
+    reversed += m.start.friction.dot(m.end.friction) < 0.0;
+    worst.push_back({k, m});
   }
   constexpr size_t kShown = 6;
-  const auto larger = [](const Surprise& x, const Surprise& y) { return x.normal + x.friction > y.normal + y.friction; };
+  const auto larger = [](const Surprise& x, const Surprise& y) { return x.excess() > y.excess(); };
   std::partial_sort(worst.begin(), worst.begin() + static_cast<std::ptrdiff_t>(std::min(kShown, worst.size())),
                     worst.end(), larger);
   std::string out = fmt::format(
@@ -218,14 +204,15 @@ std::string ContactTerm::explain_step(const VecX& q, const VecX& dq) const {
       "     of {} elements: {} close from a gap, {} stick to slip, {} slip to stick, {} friction forces reversed\n",
       change_n, model_n, change_t, model_t, m_contacts.size(), closing, to_slip, to_stick, reversed);
   for (size_t i = 0; i < std::min(kShown, worst.size()); ++i) {
-    const Surprise& s = worst[i];
-    const ContactElement& c = m_contacts[s.element];
+    const StepModel& s = worst[i].step;
+    const ContactElement& c = m_contacts[worst[i].element];
     out += fmt::format(
         "     element {} (beam elements {}, {}): beyond the model normal {:.3e} J, friction {:.3e} J; gap {:.3e} -> "
         "{:.3e} m (p_r {:.1e}); normal force {:.3e} N (cone {:.3e}); friction {:.3e} N {} -> {:.3e} N {}\n",
-        s.element, c.a.element, c.b.element, s.normal, s.friction, s.start.gap, s.end.gap, c.law.regularization,
-        s.start.normal_force, c.friction_normal, s.start.friction.norm(), s.start.slip ? "slip" : "stick",
-        s.end.friction.norm(), s.end.slip ? "slip" : "stick");
+        worst[i].element, c.a.element, c.b.element, s.normal_change - s.normal_model,
+        s.friction_change - s.friction_model, s.start.gap, s.end.gap, c.law.regularization, s.start.normal_force,
+        c.friction_normal, s.start.friction.norm(), s.start.slip ? "slip" : "stick", s.end.friction.norm(),
+        s.end.slip ? "slip" : "stick");
   }
   return out;
 }
