@@ -16,6 +16,7 @@
 #include "fibra/model/fabric.hpp"
 #include "fibra/solver/contact_loop.hpp"
 #include "fibra/solver/krylov.hpp"
+#include "fibra/solver/line_search.hpp"
 #include "fibra/solver/shift_search.hpp"
 #include "fibra/steps/step_driver.hpp"
 #include "fibra/steps/test_edges.hpp"
@@ -720,15 +721,15 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     if (opt.method.line_search && search_step && s0 < 0.0) {
       const double e0 = m_problem->evaluate(m_q, nullptr, nullptr);
       const double noise = 1e-11 * std::abs(e0) + 1e-14 * std::abs(s0);
-      double e1 = m_problem->evaluate(trial, nullptr, nullptr);
-      for (int trial_k = 0; trial_k < 8 && !(std::isfinite(e1) && e1 <= e0 + 1e-4 * alpha * s0 + noise); ++trial_k) {
-        // Minimum of the quadratic through e0, slope s0 and e(alpha), kept in [0.1, 0.5] alpha.
-        const double a_q = std::isfinite(e1) ? -s0 * alpha * alpha / (2.0 * (e1 - e0 - s0 * alpha)) : 0.1 * alpha;
-        alpha = std::clamp(a_q, 0.1 * alpha, 0.5 * alpha);
-        trial = m_q + alpha * dq;
-        e1 = m_problem->evaluate(trial, nullptr, nullptr);
-        ++m_stats.line_search_trials;
-      }
+      const StepLength found = search_step_length(
+          [&](double a) {
+            trial = m_q + a * dq;
+            return m_problem->evaluate(trial, nullptr, nullptr);
+          },
+          e0, s0, noise);
+      alpha = found.alpha;
+      m_stats.line_search_trials += found.trials;
+      if (alpha != 1.0) trial = m_q + alpha * dq;
       if (alpha < 1.0 && debug_newton())
         fmt::print(stderr, "  it {:2d} step shortened to {:.3f}; the full step's energy by term:\n{}", iterations, alpha,
                    m_problem->step_energies(m_q, dq));

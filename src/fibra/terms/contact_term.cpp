@@ -26,8 +26,8 @@ bool ContactTerm::set_contacts(std::vector<ContactElement> contacts, const Frict
   for (size_t k = 0; k < contacts.size(); ++k) {
     if (k > 0 && contacts[k].a.element == contacts[k - 1].a.element && contacts[k].b.element == contacts[k - 1].b.element)
       continue;
-    const Index na = m_model.elements[contacts[k].a.element].first_dof / kNodeDofs;
-    const Index nb = m_model.elements[contacts[k].b.element].first_dof / kNodeDofs;
+    const ElementDofs d = dofs(contacts[k]);
+    const Index na = d.a / kNodeDofs, nb = d.b / kNodeDofs;
     const Index g[6] = {na, na + 1, na + 2, nb, nb + 1, nb + 2};
     pairs.add(g);
     begin.push_back(static_cast<Index>(k));
@@ -78,8 +78,8 @@ void ContactTerm::commit(VecX& q) {
   for (size_t k = 0; k < m_contacts.size(); ++k) {
     ContactElement& c = m_contacts[k];
     c.friction_previous = m_solution[k].friction;
-    c.separation_previous = particle_position(c.b, q.data() + m_model.elements[c.b.element].first_dof) -
-                            particle_position(c.a, q.data() + m_model.elements[c.a.element].first_dof);
+    const auto [da, db] = dofs(c);
+    c.separation_previous = particle_position(c.b, q.data() + db) - particle_position(c.a, q.data() + da);
     c.fresh = false;
   }
 }
@@ -117,7 +117,6 @@ double ContactTerm::step_bound(const VecX& q, const VecX& dq) const {
 
 double ContactTerm::assemble(const VecX& q, const AssemblyTarget& target) {
   if (m_contacts.empty()) return 0.0;
-  const Model& model = m_model;
   return assemble_set<ContactVec, ContactMat>(
       m_pairs, target, target.gradient != nullptr, target.values != nullptr, m_energy_buffer,
       [&](Index s, ContactVec* g, ContactMat* h, bool& scatter) {
@@ -128,9 +127,8 @@ double ContactTerm::assemble(const VecX& q, const AssemblyTarget& target) {
         if (h) h->setZero();
         for (Index k = m_pair_begin[s]; k < m_pair_begin[s + 1]; ++k) {
           const ContactElement& c = m_contacts[k];
-          e += contact_element_energy(c, q.data() + model.elements[c.a.element].first_dof,
-                                      q.data() + model.elements[c.b.element].first_dof, m_friction, g, h, nullptr,
-                                      tangent(k), true);
+          const auto [da, db] = dofs(c);
+          e += contact_element_energy(c, q.data() + da, q.data() + db, m_friction, g, h, nullptr, tangent(k), true);
         }
         // Pairs within the detection distance that do not touch (and carry no friction) add
         // nothing: most of them in a tow, where every neighbour is a candidate.
@@ -144,8 +142,8 @@ Eigen::MatrixXd ContactTerm::local_hessian(Index k, const VecX& q) const {
   ContactVec g;
   for (Index e = m_pair_begin[k]; e < m_pair_begin[k + 1]; ++e) {
     const ContactElement& c = m_contacts[e];
-    contact_element_energy(c, q.data() + m_model.elements[c.a.element].first_dof,
-                           q.data() + m_model.elements[c.b.element].first_dof, m_friction, &g, &h, nullptr, tangent(e));
+    const auto [da, db] = dofs(c);
+    contact_element_energy(c, q.data() + da, q.data() + db, m_friction, &g, &h, nullptr, tangent(e));
     sum += h;
   }
   return sum;
@@ -158,7 +156,7 @@ Index ContactTerm::mark_overshoots(const VecX& q, const VecX& dq) {
   for (size_t k = 0; k < m_contacts.size(); ++k) {
     if (m_marked[k]) continue;
     const ContactElement& c = m_contacts[k];
-    const Index da = m_model.elements[c.a.element].first_dof, db = m_model.elements[c.b.element].first_dof;
+    const auto [da, db] = dofs(c);
     const StepModel m =
         contact_step_model(c, q.data() + da, q.data() + db, trial.data() + da, trial.data() + db, m_friction);
     if (m.excess() > 0.1 * (std::abs(m.slope) + std::abs(m.change()))) {
@@ -175,14 +173,13 @@ std::string ContactTerm::explain_step(const VecX& q, const VecX& dq) const {
   struct Surprise {
     size_t element = 0;
     StepModel step;
-    double excess() const { return step.excess(); }
   };
   std::vector<Surprise> worst;
   double change_n = 0, model_n = 0, change_t = 0, model_t = 0;
   Index closing = 0, to_slip = 0, to_stick = 0, reversed = 0;
   for (size_t k = 0; k < m_contacts.size(); ++k) {
     const ContactElement& c = m_contacts[k];
-    const Index da = m_model.elements[c.a.element].first_dof, db = m_model.elements[c.b.element].first_dof;
+    const auto [da, db] = dofs(c);
     const StepModel m = contact_step_model(c, q.data() + da, q.data() + db, trial.data() + da, trial.data() + db,
                                            m_friction, tangent(static_cast<Index>(k)));
     change_n += m.normal_change;
@@ -196,7 +193,7 @@ std::string ContactTerm::explain_step(const VecX& q, const VecX& dq) const {
     worst.push_back({k, m});
   }
   constexpr size_t kShown = 6;
-  const auto larger = [](const Surprise& x, const Surprise& y) { return x.excess() > y.excess(); };
+  const auto larger = [](const Surprise& x, const Surprise& y) { return x.step.excess() > y.step.excess(); };
   std::partial_sort(worst.begin(), worst.begin() + static_cast<std::ptrdiff_t>(std::min(kShown, worst.size())),
                     worst.end(), larger);
   std::string out = fmt::format(
@@ -221,8 +218,8 @@ std::vector<ContactResponse> ContactTerm::responses(const VecX& q) const {
   std::vector<ContactResponse> out(m_contacts.size());
   for (size_t k = 0; k < m_contacts.size(); ++k) {
     const ContactElement& c = m_contacts[k];
-    contact_element_energy(c, q.data() + m_model.elements[c.a.element].first_dof,
-                           q.data() + m_model.elements[c.b.element].first_dof, m_friction, nullptr, nullptr, &out[k]);
+    const auto [da, db] = dofs(c);
+    contact_element_energy(c, q.data() + da, q.data() + db, m_friction, nullptr, nullptr, &out[k]);
   }
   return out;
 }

@@ -93,6 +93,13 @@ class ContactTerm final : public EnergyTerm {
   ContactTangent tangent(Index element) const {
     return m_marked[static_cast<size_t>(element)] ? ContactTangent::Majorizing : m_tangent;
   }
+  /// Where the dofs of the element's two beam elements start in a vector of all dofs.
+  struct ElementDofs {
+    Index a, b;
+  };
+  ElementDofs dofs(const ContactElement& c) const {
+    return {m_model.elements[c.a.element].first_dof, m_model.elements[c.b.element].first_dof};
+  }
   /// Each cone's normal force at q; returns the largest change relative to the largest force.
   double freeze_cones(const VecX& q);
   const Model& m_model;
