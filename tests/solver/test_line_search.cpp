@@ -49,7 +49,7 @@ TEST(LineSearch, BacktracksToTheQuadraticsMinimumOnAQuadraticOvershotTwice) {
 
 TEST(LineSearch, ExpandsAStepTheInterpolationThrewTooFarBack) {
   // A kink at 0.75 (a friction slip turning to stick, a contact closing): the quadratic through
-  // e(1) puts the minimum at 0.04, clamped to 0.1. Doubling while the potential falls, and
+  // e(1) puts the minimum at 0.039, clamped to 0.1. Doubling while the potential falls, and
   // halfway to the refused full step at the end, brings the step to 0.7 instead of 0.1.
   auto e = recorded([](double a) { return a <= 0.75 ? -a : -0.75 + 50.0 * (a - 0.75); });
   const StepLength s = search_step_length(e, 0.0, -1.0, 0.0);

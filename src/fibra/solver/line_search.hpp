@@ -46,8 +46,7 @@ StepLength search_step_length(Energy&& energy, double e0, double slope, double n
   }
   if (s.alpha == 1.0 || !sufficient(s.alpha, s.energy)) return s;
   for (int k = 0; k < 3; ++k) {
-    const double a = std::min(2.0 * s.alpha, 0.5 * (s.alpha + refused));
-    if (a <= 1.05 * s.alpha) break;
+    const double a = std::min(2.0 * s.alpha, 0.5 * (s.alpha + refused));  // at least 1.07 alpha
     const double e = energy(a);
     ++s.trials;
     if (!(std::isfinite(e) && e < s.energy)) break;
