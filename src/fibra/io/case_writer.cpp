@@ -38,7 +38,7 @@ double degrees(double radians) {
 }
 
 /// A TOML basic string, quoted and escaped.
-std::string quoted(std::string_view s) {
+std::string toml_string(std::string_view s) {
   std::string out = "\"";
   for (const char ch : s) {
     switch (ch) {
@@ -133,10 +133,10 @@ std::string node_keys(const NodeRef& n, std::string_view separator) {
   std::string where;
   switch (n.kind) {
     case NodeRef::Kind::First:
-      where = entry("node", "node", quoted("first"));
+      where = entry("node", "node", toml_string("first"));
       break;
     case NodeRef::Kind::Last:
-      where = entry("node", "node", quoted("last"));
+      where = entry("node", "node", toml_string("last"));
       break;
     case NodeRef::Kind::NodeIndex:
       where = entry("node", "node", std::to_string(n.index));
@@ -145,7 +145,7 @@ std::string node_keys(const NodeRef& n, std::string_view separator) {
       where = entry("node", "at", number(n.fraction));
       break;
   }
-  return fmt::format("{}{}{}", entry("node", "fiber", quoted(n.fiber)), separator, where);
+  return fmt::format("{}{}{}", entry("node", "fiber", toml_string(n.fiber)), separator, where);
 }
 
 /// The `dofs` of a fix, or "" when it holds nothing.
@@ -162,24 +162,24 @@ std::string dofs_value(const FixSpec& f) {
   static constexpr const char* kNames[9] = {"x", "y", "z", "g1x", "g1y", "g1z", "g2x", "g2y", "g2z"};
   std::vector<std::string> items;
   for (int k = 0; k < 3; ++k)
-    if (d[k]) items.push_back(quoted(kNames[k]));
+    if (d[k]) items.push_back(toml_string(kNames[k]));
   for (int vector_index = 0; vector_index < 2; ++vector_index) {
     const int first = 3 + 3 * vector_index;
     if (d[first] && d[first + 1] && d[first + 2]) {
-      items.push_back(quoted(vector_index == 0 ? "g1" : "g2"));
+      items.push_back(toml_string(vector_index == 0 ? "g1" : "g2"));
       continue;
     }
     for (int k = first; k < first + 3; ++k)
-      if (d[k]) items.push_back(quoted(kNames[k]));
+      if (d[k]) items.push_back(toml_string(kNames[k]));
   }
   return array(items, 11);
 }
 
 void write_material(std::string& out, const MaterialSpec& m) {
   out += "\n[[material]]\n";
-  out += line("material", "name", quoted(m.name));
+  out += line("material", "name", toml_string(m.name));
   const bool transverse = m.model == MaterialSpec::Model::Transverse;
-  out += line("material", "model", quoted(transverse ? "transverse" : "isotropic"));
+  out += line("material", "model", toml_string(transverse ? "transverse" : "isotropic"));
   out += line("material", "young", number(m.young));
   out += line("material", "poisson", number(m.poisson));
   if (transverse) {
@@ -191,8 +191,8 @@ void write_material(std::string& out, const MaterialSpec& m) {
 
 void write_fiber(std::string& out, const FiberSpec& f) {
   out += "\n[[fiber]]\n";
-  out += line("fiber", "name", quoted(f.name));
-  out += line("fiber", "material", quoted(f.material));
+  out += line("fiber", "name", toml_string(f.name));
+  out += line("fiber", "material", toml_string(f.material));
   if (f.semi_axis_1 == f.semi_axis_2 && f.radius == f.semi_axis_1) {
     out += line("fiber", "radius", number(f.radius));
   } else {
@@ -229,7 +229,7 @@ void write_fiber(std::string& out, const FiberSpec& f) {
 
 void write_body(std::string& out, const BodySpec& b) {
   out += "\n[[body]]\n";
-  out += line("body", "name", quoted(b.name));
+  out += line("body", "name", toml_string(b.name));
   out += line("body", "center", vec3(b.center));
   if (b.axes != Mat3::Identity()) {
     // Rows D1, D2, D3: the columns of the frame.
@@ -240,7 +240,7 @@ void write_body(std::string& out, const BodySpec& b) {
 
 void write_binding(std::string& out, const BindingSpec& b) {
   out += "\n[[binding]]\n";
-  out += line("binding", "body", quoted(b.body));
+  out += line("binding", "body", toml_string(b.body));
   if (!b.ends.empty()) {
     std::vector<std::string> ends;
     for (const NodeRef& n : b.ends) ends.push_back(fmt::format("{{ {} }}", node_keys(n, ", ")));
@@ -248,7 +248,7 @@ void write_binding(std::string& out, const BindingSpec& b) {
   }
   if (!b.bodies.empty()) {
     std::vector<std::string> bodies;
-    for (const std::string& name : b.bodies) bodies.push_back(quoted(name));
+    for (const std::string& name : b.bodies) bodies.push_back(toml_string(name));
     out += line("binding", "bodies", array(bodies, 8));
   }
   if (!b.grip.empty()) {
@@ -261,11 +261,11 @@ void write_binding(std::string& out, const BindingSpec& b) {
 
 void write_tow(std::string& out, const TowSpec& t) {
   out += "\n[[tow]]\n";
-  out += line("tow", "name", quoted(t.name));
-  out += line("tow", "direction", quoted(t.direction == TowSpec::Direction::Warp ? "warp" : "weft"));
+  out += line("tow", "name", toml_string(t.name));
+  out += line("tow", "direction", toml_string(t.direction == TowSpec::Direction::Warp ? "warp" : "weft"));
   out += line("tow", "index", std::to_string(t.index));
   std::vector<std::string> fibers;
-  for (const std::string& name : t.fibers) fibers.push_back(quoted(name));
+  for (const std::string& name : t.fibers) fibers.push_back(toml_string(name));
   out += line("tow", "fibers", array(fibers, 8));
 }
 
@@ -283,12 +283,12 @@ void write_weave(std::string& out, const std::vector<std::vector<int>>& matrix) 
 
 void write_step(std::string& out, const StepSpec& s) {
   out += "\n[[step]]\n";
-  out += line("step", "name", quoted(s.name));
-  out += line("step", "kind", quoted(StepSpec::kind_name(s.kind)));
+  out += line("step", "name", toml_string(s.name));
+  out += line("step", "kind", toml_string(StepSpec::kind_name(s.kind)));
   if (s.kind == StepSpec::Kind::Biaxial) out += line("step", "strain", number(s.strain)) + line("step", "ratio", number(s.ratio));
   if (s.kind == StepSpec::Kind::Shear) {
     out += line("step", "angle", number(s.angle));
-    if (s.free_height) out += line("step", "height", quoted("free"));
+    if (s.free_height) out += line("step", "height", toml_string("free"));
   }
   if (s.is_proximal()) out += line("step", "tolerance", number(s.tolerance));
   out += line("step", "increments", std::to_string(s.increments));
@@ -306,7 +306,7 @@ void write_step(std::string& out, const StepSpec& s) {
   }
   for (const BodyStepSpec& b : s.bodies) {
     out += "\n  [[step.body]]\n";
-    out += "  " + line("step.body", "name", quoted(b.name));
+    out += "  " + line("step.body", "name", toml_string(b.name));
     if (b.has_displacement) out += "  " + line("step.body", "displacement", components(b.displacement));
     if (b.has_rotation) out += "  " + line("step.body", "rotation", components(b.rotation));
     if (b.force) out += "  " + line("step.body", "force", vec3(*b.force));
@@ -320,8 +320,8 @@ void write_solver(std::string& out, const SolverSpec& s) {
                       {"displacement_tolerance", number(s.displacement_tolerance)},
                       {"max_iterations", std::to_string(s.max_iterations)},
                       {"max_cuts", std::to_string(s.max_cuts)},
-                      {"linear_solver", quoted(s.linear_solver)},
-                      {"krylov_precision", quoted(s.krylov_precision)},
+                      {"linear_solver", toml_string(s.linear_solver)},
+                      {"krylov_precision", toml_string(s.krylov_precision)},
                       {"binding_tolerance", number(s.binding_tolerance)},
                       {"max_binding_updates", std::to_string(s.max_binding_updates)}});
 }
@@ -344,10 +344,10 @@ void write_contact(std::string& out, const ContactSpec& c) {
 void write_output(std::string& out, const OutputSpec& o) {
   std::string checkpoint;
   switch (o.checkpoint) {
-    case OutputSpec::Checkpoint::Auto: checkpoint = quoted("auto"); break;
-    case OutputSpec::Checkpoint::Never: checkpoint = quoted("never"); break;
+    case OutputSpec::Checkpoint::Auto: checkpoint = toml_string("auto"); break;
+    case OutputSpec::Checkpoint::Never: checkpoint = toml_string("never"); break;
     case OutputSpec::Checkpoint::Increments: checkpoint = std::to_string(o.checkpoint_increments); break;
-    case OutputSpec::Checkpoint::Seconds: checkpoint = quoted(fmt::format("{} s", number(o.checkpoint_seconds))); break;
+    case OutputSpec::Checkpoint::Seconds: checkpoint = toml_string(fmt::format("{} s", number(o.checkpoint_seconds))); break;
   }
   out += whole_table("[output]", "output",
                      {{"every", std::to_string(o.every)},
@@ -365,7 +365,7 @@ std::string write_case_toml(const Case& c) {
   // reference configuration; the comment keeps where its run started.
   if (!c.start.empty())
     out += fmt::format("# This run went on from the state (state.bin) of the result directory {}\n", c.start);
-  if (!c.title.empty()) out += line("top", "title", quoted(c.title));
+  if (!c.title.empty()) out += line("top", "title", toml_string(c.title));
   for (const MaterialSpec& m : c.materials) write_material(out, m);
   for (const FiberSpec& f : c.fibers) write_fiber(out, f);
   for (const FixSpec& f : c.fixes) {
