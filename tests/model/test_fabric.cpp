@@ -66,7 +66,9 @@ TEST_P(Packing, CountNoOverlapInsideTheEllipse) {
   double closest = 1e300;
   for (int i = 0; i < n; ++i)
     for (int j = i + 1; j < n; ++j) closest = std::min(closest, (p[i] - p[j]).norm());
-  if (n > 1) EXPECT_GE(closest, 2 * r * (1 - 1e-12));
+  if (n > 1) {
+    EXPECT_GE(closest, 2 * r * (1 - 1e-12));
+  }
   // Every disc inside the ellipse (its boundary sampled densely).
   for (const auto& c : p)
     for (int s = 0; s < 720; ++s) {
