@@ -3,8 +3,8 @@
 # given: Clang, AddressSanitizer and UndefinedBehaviorSanitizer, libFuzzer's coverage in
 # fibra's library and its harnesses (fuzz/), -O1 with assertions on (no NDEBUG: Eigen checks
 # its indices too), line tables only for debug information (-g1: the reports' stacks still name
-# files and lines; full debug information makes the objects 2-4 times larger and their compiling
-# a fifth slower). Used by scripts/sanitize.sh and scripts/fuzz.sh (docs/sanitizers.md).
+# files and lines; full debug information makes the objects up to 5 times larger and most units'
+# compiling 20-35 % slower). Used by scripts/sanitize.sh and scripts/fuzz.sh (docs/sanitizers.md).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${FIBRA_ASAN_DIR:-$root/build-asan}"
