@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs each libFuzzer harness of fuzz/ (docs/sanitizers.md) for FIBRA_FUZZ_SECONDS seconds (60 by
-# default), one after the other, from its seeds: the case readers from every case file of the
+# default), as many at a time as the machine has cores (FIBRA_JOBS), each from its seeds: the case readers from every case file of the
 # repository (the JSON harness from their conversion to JSON), the state reader from
 # fuzz/seeds/state, the nodes.csv reader from fuzz/seeds/nodes_csv and tests/malformed/nodes.csv.
 # A crash, an exception other than InputError, a sanitizer report, a leak, an input that takes
@@ -49,27 +49,44 @@ for path in sys.stdin.read().split():
   esac
 }
 
-failed=0
-for h in "${harnesses[@]}"; do
-  work="$build/fuzz-runs/$h"
+# One harness: its seeds, then its run; the outcome in $work/status, the lines to print in
+# $work/report (printed in the harnesses' order once all have run).
+fuzz_one() {
+  local h=$1 work="$build/fuzz-runs/$1" dict=() start status stats execs seeds
   seed "$h" "$work/corpus"
-  dict=()
+  seeds=$(ls "$work/corpus" | wc -l)
   case "$h" in fuzz_case_toml | fuzz_case_json) dict=(-dict="$root/fuzz/case.dict") ;; esac
-  echo "fuzz.sh: $h for $seconds s from $(ls "$work/corpus" | wc -l) seeds"
   start=$(date +%s)
   if "$build/fuzz/$h" "$work/corpus" "${dict[@]}" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
     -artifact_prefix="$work/" -print_final_stats=1 >"$work/log" 2>&1; then
     status=ok
   else
     status=FAILED
-    failed=1
   fi
   stats=$(grep -E '^#[0-9]+[[:space:]]+DONE' "$work/log" | tail -1 || true)
   execs=$(grep -E '^stat::number_of_executed_units' "$work/log" | awk '{print $2}' || true)
-  echo "fuzz.sh: $h: $status after $(($(date +%s) - start)) s, ${execs:-?} runs; ${stats:-no final stats}"
-  if [ "$status" = FAILED ]; then
-    tail -60 "$work/log"
-    ls "$work"/crash-* "$work"/leak-* "$work"/timeout-* "$work"/oom-* 2>/dev/null || true
-  fi
+  {
+    echo "fuzz.sh: $h: $status after $(($(date +%s) - start)) s from $seeds seeds, ${execs:-?} runs; ${stats:-no final stats}"
+    if [ "$status" = FAILED ]; then
+      tail -60 "$work/log"
+      ls "$work"/crash-* "$work"/leak-* "$work"/timeout-* "$work"/oom-* 2>/dev/null || true
+    fi
+  } >"$work/report"
+  echo "$status" >"$work/status"
+}
+
+jobs="${FIBRA_JOBS:-$(nproc)}"
+for h in "${harnesses[@]}"; do
+  rm -f "$build/fuzz-runs/$h/status" "$build/fuzz-runs/$h/report"
+  mkdir -p "$build/fuzz-runs/$h"
+  while (($(jobs -rp | wc -l) >= jobs)); do wait -n || true; done
+  echo "fuzz.sh: $h for $seconds s"
+  fuzz_one "$h" &
+done
+wait
+failed=0
+for h in "${harnesses[@]}"; do
+  cat "$build/fuzz-runs/$h/report" 2>/dev/null || echo "fuzz.sh: $h: no report"
+  [ "$(cat "$build/fuzz-runs/$h/status" 2>/dev/null)" = ok ] || failed=1
 done
 exit "$failed"
