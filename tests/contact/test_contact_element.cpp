@@ -253,7 +253,8 @@ TEST(ContactElement, MajorizingTangentLiesAboveTheEnergy) {
       ContactVec g;
       ContactMat h;
       contact_element_energy(s.c, q.data(), q.data() + kElementDofs, fp, &g, &h, nullptr, tangent);
-      return g.dot(dq) + 0.5 * dq.dot(h * dq);
+      const ContactVec d = dq;
+      return g.dot(d) + 0.5 * d.dot(h * d);
     };
     return Along{energy(t) - energy(q), model(ContactTangent::Majorizing), model(ContactTangent::Exact)};
   };
