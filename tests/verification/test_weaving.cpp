@@ -630,11 +630,13 @@ TestStepRun run_test_step(const std::function<void(Case&)>& method, const std::s
 // either way, and their forces agree to the path-dependence of friction. The first level's
 // loading increment has no earlier one to expect its drag force from: it takes the drag force
 // its first minimization leaves (without that rule it is solved as with test_inexact = 0).
-// Here an equibiaxial pull of 0.4 % and a shear of 4 degrees, each in two levels. Measured
-// (the settling solves to a hundredth of test_tolerance too): biaxial 32 Newton iterations
-// against 43 (the first loading increment 2 against 4; 4 and 34 in all without its rule), x+
-// forces 9.5001 / 9.5001 and 16.049 / 16.049 N; shear 47 against 75 (3 against 5; 5 and 49),
-// top-edge forces 0.1504 / 0.1504 and 0.57287 / 0.57282 N.
+// Here an equibiaxial pull of 0.4 % and a shear of 4 degrees, each in two levels. Measured: biaxial
+// 31 Newton iterations against 38, x+ forces 9.4945 / 9.5024 and 16.036 / 16.052 N; shear 44
+// against 60, top-edge forces 0.15066 / 0.15069 and 0.57270 / 0.57299 N. The first loading
+// increment takes 2 (biaxial) and 3 (shear) iterations either way on this sample: its bindings
+// are held as exactly as its residual (StaticSolver::equilibrium), so no binding update
+// re-solves it; the first loading's rule shows on the 480-fiber plain shear's first level, 8
+// iterations against 11 (docs/performance.md, "Inexact solves").
 TEST(FabricTests, InexactTestSolvesSaveIterationsNotTheCurve) {
   auto run = [](const std::string& step, double inexact, bool pull) {
     return run_test_step([inexact](Case& c) { c.solver.method.test_inexact = inexact; }, step, pull, inexact > 0 ? "inexact.toml" : "exact.toml",
@@ -655,7 +657,6 @@ TEST(FabricTests, InexactTestSolvesSaveIterationsNotTheCurve) {
       std::printf(" %.5g / %.5g", inexact.forces[k], exact.forces[k]);
     std::printf(" N\n");
     EXPECT_LT(inexact.iterations, exact.iterations);
-    EXPECT_LT(inexact.first_loading, exact.first_loading);
     ASSERT_EQ(inexact.forces.size(), 2u);
     ASSERT_EQ(exact.forces.size(), 2u);
     for (size_t k = 0; k < 2; ++k) EXPECT_NEAR(inexact.forces[k], exact.forces[k], 0.002 * std::abs(exact.forces[k]));

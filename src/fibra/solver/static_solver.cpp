@@ -191,7 +191,6 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   m_binding_updates = 0;
   m_refusal.clear();
   m_newton_tolerance = m_case.solver.residual_tolerance;
-  m_tolerance_scale = 1.0;
   m_tolerance_from_drag = false;
   if (!m_contact) return equilibrium(history, iterations, residual);
   // How the step's driver has the increment solved (steps/step_driver.hpp): the weave's
@@ -242,9 +241,8 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   // than 1e-5 of the reference force (docs/performance.md, "Test levels").
   // A step's first loading increment has no earlier loading increment to expect its drag
   // force from: its first minimization measures it (equilibrium()). Solved to
-  // pseudo_tolerance (1e-6 of the reference force), the 480-fiber plain shear's was re-solved
-  // after 6 and 4 binding updates in its two detection passes (18 of its 44 Newton
-  // iterations), each to a residual 60,000 times below the 6e-2 drag force it left.
+  // pseudo_tolerance (1e-6 of the reference force) instead, the 480-fiber plain shear's (a
+  // 1.25-degree level from the relaxed state) takes 11 Newton iterations against 8.
   const bool test_with_drag = m_mode.test && m_mode.drag > 0.0;
   if (test_with_drag) {
     const double expected = !lagged ? m_mode.tolerance : m_mode.loading ? m_run.load_residual : m_run.relax_residual;
@@ -289,9 +287,7 @@ double StaticSolver::drag_residual(DragPart part) const {
 }
 
 void StaticSolver::loosen_tolerance(double loose) {
-  if (loose <= m_newton_tolerance) return;
-  m_tolerance_scale *= loose / m_newton_tolerance;
-  m_newton_tolerance = loose;
+  m_newton_tolerance = std::max(m_newton_tolerance, loose);
 }
 
 bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, double& residual) {
@@ -311,7 +307,14 @@ bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, do
       m_tolerance_from_drag = false;
       loosen_tolerance(m_case.solver.method.test_inexact * drag_residual(DragPart::Positions));
     }
-    const double tolerance = m_case.solver.binding_tolerance * m_model.length_scale * m_tolerance_scale;
+    // The bindings are held as exactly as the solve's residual and correction: their tolerance
+    // (a length, like the correction's) is scaled by the solve's tolerance over
+    // residual_tolerance. Held to binding_tolerance in the weave's and relax's pseudo-time
+    // increments (residual 1e-6 of the reference force), the 2 x 2 weave of the paper's 48-fiber
+    // tows made 52 binding updates instead of 16, each a solve of its own (358 Newton
+    // iterations instead of 322), for the same crimps and curve to 1e-4.
+    const double tolerance = m_case.solver.binding_tolerance * m_model.length_scale *
+                             (m_newton_tolerance / m_case.solver.residual_tolerance);
     if (m_problem->update_lagged(m_q, {tolerance, m_newton_tolerance * m_reference_force})) return true;
     ++m_binding_updates;
     ++m_stats.binding_updates;
