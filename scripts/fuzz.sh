@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Runs each libFuzzer harness of fuzz/ (docs/sanitizers.md) for FIBRA_FUZZ_SECONDS seconds (60 by
-# default), as many at a time as the machine has cores (FIBRA_JOBS), each from its seeds: the case readers from every case file of the
-# repository (the JSON harness from their conversion to JSON), the state reader from
-# fuzz/seeds/state, the nodes.csv reader from fuzz/seeds/nodes_csv and tests/malformed/nodes.csv.
+# default), as many at a time as the machine has cores (FIBRA_JOBS), each from its seeds: the case
+# readers from every case file of the repository (the JSON harness from their conversion to JSON),
+# the state reader from fuzz/seeds/state, the nodes.csv reader from fuzz/seeds/nodes_csv and
+# tests/malformed/nodes.csv.
 # A crash, an exception other than InputError, a sanitizer report, a leak, an input that takes
 # more than 10 s or 2 GiB is a finding: the harness stops, its input is kept in
 # build-asan/fuzz-runs/<harness>/ (crash-*, leak-*, timeout-*, oom-*) and this script fails.
@@ -75,11 +76,11 @@ fuzz_one() {
   echo "$status" >"$work/status"
 }
 
-jobs="${FIBRA_JOBS:-$(nproc)}"
+parallel="${FIBRA_JOBS:-$(nproc)}"
 for h in "${harnesses[@]}"; do
   rm -f "$build/fuzz-runs/$h/status" "$build/fuzz-runs/$h/report"
   mkdir -p "$build/fuzz-runs/$h"
-  while (($(jobs -rp | wc -l) >= jobs)); do wait -n || true; done
+  while (($(jobs -rp | wc -l) >= parallel)); do wait -n || true; done
   echo "fuzz.sh: $h for $seconds s"
   fuzz_one "$h" &
 done
