@@ -14,6 +14,8 @@ build="${FIBRA_ASAN_DIR:-$root/build-asan}"
 seconds="${FIBRA_FUZZ_SECONDS:-60}"
 harnesses=("$@")
 ((${#harnesses[@]})) || harnesses=(fuzz_case_toml fuzz_case_json fuzz_state fuzz_nodes_csv)
+parallel="${FIBRA_JOBS:-$(nproc)}"
+[[ $parallel =~ ^[1-9][0-9]*$ ]] || { echo "fuzz.sh: FIBRA_JOBS must be a positive whole number, got \"$parallel\"" >&2; exit 2; }
 # FIBRA_FUZZ_NO_BUILD=1: run the harnesses as built (while build-asan/ builds something else).
 [ -n "${FIBRA_FUZZ_NO_BUILD:-}" ] || bash "$root/scripts/asan_build.sh" "${harnesses[@]}"
 # shellcheck disable=SC1091
@@ -76,7 +78,10 @@ fuzz_one() {
   echo "$status" >"$work/status"
 }
 
-parallel="${FIBRA_JOBS:-$(nproc)}"
+# A harness named twice runs once (two runs would share its directory).
+mapfile -t harnesses < <(printf '%s\n' "${harnesses[@]}" | awk '!seen[$0]++')
+# Stopped from outside (a CI timeout), the script stops its harnesses too.
+trap 'kill $(jobs -p) 2>/dev/null; exit 143' INT TERM
 for h in "${harnesses[@]}"; do
   rm -f "$build/fuzz-runs/$h/status" "$build/fuzz-runs/$h/report"
   mkdir -p "$build/fuzz-runs/$h"
@@ -87,7 +92,8 @@ done
 wait
 failed=0
 for h in "${harnesses[@]}"; do
-  cat "$build/fuzz-runs/$h/report" 2>/dev/null || echo "fuzz.sh: $h: no report"
+  cat "$build/fuzz-runs/$h/report" 2>/dev/null ||
+    echo "fuzz.sh: $h: FAILED before its run ended (its seeds or its run; the messages above say why)"
   [ "$(cat "$build/fuzz-runs/$h/status" 2>/dev/null)" = ok ] || failed=1
 done
 exit "$failed"

@@ -632,7 +632,7 @@ TestStepRun run_test_step(const std::function<void(Case&)>& method, const std::s
 // its first minimization leaves (without that rule it is solved as with test_inexact = 0).
 // Here an equibiaxial pull of 0.4 % and a shear of 4 degrees, each in two levels. Measured: biaxial
 // 31 Newton iterations against 38, x+ forces 9.4945 / 9.5024 and 16.036 / 16.052 N; shear 44
-// against 60, top-edge forces 0.15066 / 0.15069 and 0.57270 / 0.57299 N. The first loading
+// against 60, top-edge forces 0.15066 / 0.15069 and 0.5727 / 0.57299 N. The first loading
 // increment takes 2 (biaxial) and 3 (shear) iterations either way on this sample: its bindings
 // are held as exactly as its residual (StaticSolver::equilibrium), so no binding update
 // re-solves it; the first loading's rule shows on the 480-fiber plain shear's first level, 8
