@@ -308,13 +308,12 @@ bool StaticSolver::equilibrium(std::vector<double>& history, int& iterations, do
       loosen_tolerance(m_case.solver.method.test_inexact * drag_residual(DragPart::Positions));
     }
     // The bindings are held as exactly as the solve's residual and correction: their tolerance
-    // (a length, like the correction's) is scaled by the solve's tolerance over
-    // residual_tolerance. Held to binding_tolerance in the weave's and relax's pseudo-time
-    // increments (residual 1e-6 of the reference force), the 2 x 2 weave of the paper's 48-fiber
-    // tows made 52 binding updates instead of 16, each a solve of its own (358 Newton
-    // iterations instead of 322), for the same crimps and curve to 1e-4.
-    const double tolerance = m_case.solver.binding_tolerance * m_model.length_scale *
-                             (m_newton_tolerance / m_case.solver.residual_tolerance);
+    // (a length, like the correction's) is scaled by the solve's loosening(). Held to
+    // binding_tolerance in the weave's and relax's pseudo-time increments (residual 1e-6 of the
+    // reference force), the 2 x 2 weave of the paper's 48-fiber tows made 52 binding updates
+    // instead of 16, each a solve of its own (358 Newton iterations instead of 322), for the
+    // same crimps and curve to 1e-4.
+    const double tolerance = m_case.solver.binding_tolerance * m_model.length_scale * loosening();
     if (m_problem->update_lagged(m_q, {tolerance, m_newton_tolerance * m_reference_force})) return true;
     ++m_binding_updates;
     ++m_stats.binding_updates;
@@ -520,8 +519,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     history.push_back(residual);
     if (!std::isfinite(residual)) return false;
     const double tolerance = m_newton_tolerance;
-    const bool small_step =
-        last_step <= opt.displacement_tolerance * (tolerance / opt.residual_tolerance) * length;
+    const bool small_step = last_step <= opt.displacement_tolerance * loosening() * length;
     // Converged: residual and correction small; or no correction needed at all.
     if (residual <= tolerance && (small_step || iterations == 0)) return true;
     // Round-off floor: on slender fibers the residual cannot fall below about eps times the

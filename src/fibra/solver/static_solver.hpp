@@ -178,6 +178,9 @@ class StaticSolver {
   bool equilibrium(std::vector<double>& history, int& iterations, double& residual);
   /// Raises the current Newton tolerance to `loose` where that is looser, the bindings' alike.
   void loosen_tolerance(double loose);
+  /// How much looser the current Newton solves are than residual_tolerance: the correction's
+  /// tolerance and the bindings' (both lengths) are scaled by it, as the residual's is.
+  double loosening() const { return m_newton_tolerance / m_case.solver.residual_tolerance; }
   /// Relative residual (scaled like Newton's, over the reference force) at the current state with
   /// the contact normals and frozen cones just updated: how far the update moved the forces.
   double normal_update_residual();
