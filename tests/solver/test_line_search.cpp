@@ -96,5 +96,67 @@ TEST(LineSearch, TakesTheLastTrialWhenNoLengthDecreasesEnough) {
   EXPECT_LT(s.alpha, 0.5 * 0.5 * 0.5);
 }
 
+// Where Newton starts along a weave increment's prediction (search_prediction_length).
+TEST(PredictionSearch, StartsAtTheParabolasMinimumOnAQuadratic) {
+  // e(t) = (t - 0.3)^2: the parabola through e(0), its slope and e(1) is e itself.
+  auto e = recorded([](double t) { return (t - 0.3) * (t - 0.3); });
+  const StepLength s = search_prediction_length(e, 0.09, -0.6);
+  EXPECT_NEAR(s.alpha, 0.3, 1e-15);
+  EXPECT_NEAR(s.energy, 0.0, 1e-15);
+  EXPECT_EQ(s.trials, 1);
+  EXPECT_EQ(e.lengths.size(), 2u);
+}
+
+TEST(PredictionSearch, TakesTheWholePredictionWhereThePotentialFallsBeyondIt) {
+  // Minimum at 1.5, beyond the prediction: the whole of it, no evaluation but e(1).
+  auto e = recorded([](double t) { return (t - 1.5) * (t - 1.5); });
+  const StepLength s = search_prediction_length(e, 2.25, -3.0);
+  EXPECT_EQ(s.alpha, 1.0);
+  EXPECT_DOUBLE_EQ(s.energy, 0.25);
+  EXPECT_EQ(e.lengths, std::vector<double>{1.0});
+  // Not convex along it (a concave potential): the whole of it too.
+  auto c = recorded([](double t) { return -t * t - t; });
+  EXPECT_EQ(search_prediction_length(c, 0.0, -1.0).alpha, 1.0);
+}
+
+TEST(PredictionSearch, HalvesUntilThePotentialIsBelowTheStarts) {
+  // A kink at 0.1 (a contact closing): the parabola through e(0) = 0, the slope -1 and
+  // e(1) = 1.7 has its minimum at 1 / 5.4, where the potential is 0.07, above the start's;
+  // halved, 1 / 10.8, it is below.
+  auto e = recorded([](double t) { return t <= 0.1 ? -t : -0.1 + 2.0 * (t - 0.1); });
+  const StepLength s = search_prediction_length(e, 0.0, -1.0);
+  EXPECT_NEAR(s.alpha, 1.0 / 10.8, 1e-15);
+  EXPECT_NEAR(s.energy, -1.0 / 10.8, 1e-15);
+  EXPECT_EQ(s.trials, 2);
+  ASSERT_EQ(e.lengths.size(), 3u);
+  EXPECT_NEAR(e.lengths[1], 1.0 / 5.4, 1e-15);
+  // A potential that rises along the whole prediction: the start.
+  auto up = recorded([](double t) { return t * t + t; });
+  const StepLength none = search_prediction_length(up, 0.0, 1.0);
+  EXPECT_EQ(none.alpha, 0.0);
+  EXPECT_EQ(none.energy, 0.0);
+  // Descending at the start, but only within 1e-3 of it: four halvings from the parabola's
+  // minimum (0.25) do not get there, and Newton starts at the start.
+  auto narrow = recorded([](double t) { return t < 1e-3 ? -t : 1.0; });
+  const StepLength back = search_prediction_length(narrow, 0.0, -1.0);
+  EXPECT_EQ(back.alpha, 0.0);
+  EXPECT_EQ(back.energy, 0.0);
+  EXPECT_EQ(back.trials, 5);
+  EXPECT_DOUBLE_EQ(narrow.lengths.back(), 0.015625);
+}
+
+TEST(PredictionSearch, StartsHalfwayWhereThePredictionCannotBeEvaluated) {
+  auto e = recorded([](double t) { return t > 0.6 ? std::numeric_limits<double>::quiet_NaN() : (t - 0.4) * (t - 0.4); });
+  const StepLength s = search_prediction_length(e, 0.16, -0.8);
+  EXPECT_DOUBLE_EQ(s.alpha, 0.5);
+  EXPECT_DOUBLE_EQ(s.energy, 0.01);
+  // Halved while the potential is not finite or not below the start's.
+  auto far = recorded([](double t) { return t > 0.1 ? std::numeric_limits<double>::infinity() : -t; });
+  const StepLength f = search_prediction_length(far, 0.0, -1.0);
+  EXPECT_DOUBLE_EQ(f.alpha, 0.0625);
+  const std::vector<double> expected{1.0, 0.5, 0.25, 0.125, 0.0625};
+  EXPECT_EQ(far.lengths, expected);
+}
+
 }  // namespace
 }  // namespace fibra::test

@@ -195,7 +195,11 @@ TEST(StepDrivers, AWeaveEndsOnceItsTowsAreApartAndStopsAtTwiceItsIncrements) {
   RecordingHost host;
   host.depth = 1.5;
   run.lambda = 2.0 / 3.0;
-  d.converged(run, host, solved(1.0 / 3.0, 5));
+  const VecX start = VecX::Zero(2), end = VecX::Ones(2);
+  SolvedIncrement inc = solved(1.0 / 3.0, 5);
+  inc.start = &start;
+  inc.state = &end;
+  d.converged(run, host, inc);
   EXPECT_FALSE(run.relaxed);  // at full load, but 1.5 times the cap deep
   run.lambda = 1.0;
   run.done = 5;
@@ -205,12 +209,51 @@ TEST(StepDrivers, AWeaveEndsOnceItsTowsAreApartAndStopsAtTwiceItsIncrements) {
   EXPECT_NE(why.find("after 6 increments"), std::string::npos) << why;
   EXPECT_NE(why.find("1.5 times"), std::string::npos) << why;
   host.depth = 1.0;
-  d.converged(run, host, solved(0.0, 5));
+  inc.step_dl = 0.0;
+  d.converged(run, host, inc);
   EXPECT_TRUE(run.relaxed);
   EXPECT_TRUE(d.stop(run, host).empty());
   // Without contact a weave ends at full load.
   const WeaveDriver alone(st, opt, false, 0.0);
   EXPECT_TRUE(fresh(alone, 3).relaxed);
+}
+
+// A weave increment with contact starts from the last one's motion scaled to its load step (the
+// whole motion at full load), and is solved as the unpredicted increment is: its drag holds its
+// start and its first detection is made there (IncrementMode::predicted, StaticSolver).
+TEST(StepDrivers, AWeavePredictsFromTheLastIncrementsMotion) {
+  const SolverSpec opt;
+  const StepSpec st = step(StepSpec::Kind::Weave, 4);
+  const WeaveDriver d(st, opt, true, kK0);
+  SolverProgress run = fresh(d, 4);
+  RecordingHost host;
+  EXPECT_FALSE(d.mode(run, 0.25).predicted);
+  d.predict(run, host, 0.25);
+  EXPECT_EQ(host.moved.size(), 0);  // the step's first increment: no motion yet
+  const VecX start = VecX::Constant(3, 1.0), end = VecX::Constant(3, 3.0);
+  SolvedIncrement inc = solved(0.25, 6);
+  inc.start = &start;
+  inc.state = &end;
+  d.converged(run, host, inc);
+  run.lambda = 0.25;
+  EXPECT_TRUE(d.mode(run, 0.125).predicted);
+  d.predict(run, host, 0.125);
+  EXPECT_EQ(host.moved, VecX::Constant(3, 2.0));
+  EXPECT_DOUBLE_EQ(host.move_scale, 0.5);
+  // At full load the increments have no load step: the last motion as it was.
+  inc.step_dl = 0.0;
+  d.converged(run, host, inc);
+  run.lambda = 1.0;
+  d.predict(run, host, 0.0);
+  EXPECT_DOUBLE_EQ(host.move_scale, 1.0);
+  // Without contact nothing is predicted (the weave is then a load step without loads).
+  const WeaveDriver alone(st, opt, false, 0.0);
+  SolverProgress bare = fresh(alone, 4);
+  alone.converged(bare, host, inc);
+  EXPECT_FALSE(alone.mode(bare, 0.25).predicted);
+  RecordingHost untouched;
+  alone.predict(bare, untouched, 0.25);
+  EXPECT_EQ(untouched.moved.size(), 0);
 }
 
 TEST(StepDrivers, ARelaxStepsDragFallsAfterEasyIncrementsAndRisesAfterFailures) {

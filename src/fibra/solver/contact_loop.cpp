@@ -24,13 +24,18 @@ bool ContactLoop::solve(const ContactLoopRules& rules, const ContactLoopHost& ho
   // stiffer penalty and the loops go on from the current state.
   const ContactSpec& spec = m_manager.spec();
   int total_iterations = 0;
+  // A predicted weave increment detects first at its start (WeaveDriver::predict): the elements
+  // and prescribed normals are those an unpredicted increment solves with.
+  const VecX* first = rules.first_detection;
   auto detect = [&]() {
     const auto t0 = std::chrono::steady_clock::now();
-    std::vector<ContactElement> fresh = m_manager.detect(q, q_start, m_problem.contacts());
+    const VecX& at = first ? *first : q;
+    first = nullptr;
+    std::vector<ContactElement> fresh = m_manager.detect(at, q_start, m_problem.contacts());
     if (weave) {
       // METHOD §6: contacts between crossing tows pushed to the pattern's side; the
       // penetration found at the start of the step is released linearly.
-      const double deepest = m_manager.prescribe_normals(fresh, q, Vec3::UnitZ(), rules.weave_side, 0.0);
+      const double deepest = m_manager.prescribe_normals(fresh, at, Vec3::UnitZ(), rules.weave_side, 0.0);
       if (run.weave_depth < 0.0) run.weave_depth = deepest;
       // Released over the first half of the step; the second half settles.
       const double offset = std::max(0.0, 1.0 - 2.0 * rules.lambda) * run.weave_depth;
@@ -57,6 +62,7 @@ bool ContactLoop::solve(const ContactLoopRules& rules, const ContactLoopHost& ho
   bool stalled_increment = false;
   for (int d = 0; d < spec.max_detections; ++d) {
     if (m_problem.set_contacts(std::move(contacts), friction)) host.pattern_changed();
+    if (d == 0 && rules.first_detection) host.search_prediction();
     bool normals_settled = false;
     // Friction: the normal force that sets each element's cone is frozen for a Newton solve
     // and updated with the normals (a fixed point, like them): within the solve the friction

@@ -26,6 +26,10 @@ struct ContactLoopRules {
   /// half; frictionless; the tows may pass through each other.
   bool weave = false;
   std::function<int(int, int)> weave_side;
+  /// A predicted weave increment (WeaveDriver::predict): its start, its loads applied. The first
+  /// detection is made there, and once its elements are set the state is searched along the
+  /// prediction (ContactLoopHost::search_prediction) before the first minimization.
+  const VecX* first_detection = nullptr;
   /// Proximal increments (relax, tests, held load steps): once the normals iterate (not
   /// `lagged`), the increment is settled when the residual with the updated normals and cones is
   /// below `tolerance`, and ends when that residual no longer halves.
@@ -59,6 +63,9 @@ struct ContactLoopHost {
   /// The residual at the current state with the fixed-point quantities just updated, relative to
   /// the reference force.
   std::function<double()> moved_residual;
+  /// A predicted increment: moves the state to where Newton starts along its prediction, from
+  /// ContactLoopRules::first_detection (StaticSolver::search_prediction).
+  std::function<void()> search_prediction;
 };
 
 /// The contact loops of one increment.

@@ -56,4 +56,32 @@ StepLength search_step_length(Energy&& energy, double e0, double slope, double n
   return s;
 }
 
+/// How far along a prediction Newton starts (a weave increment's, StaticSolver::search_prediction).
+/// `energy(t)` is the potential at the start moved by t times the prediction, `e0` the potential
+/// at the start and `slope` the directional derivative along the prediction there (of either
+/// sign: a prediction is no descent direction by construction).
+///
+/// The minimum in [0, 1] of the parabola through e0, the slope and e(1) (1 where the parabola is
+/// not convex; 0.5 where e(1) is not finite), halved up to four times until the potential there
+/// is below e0; 0 (the start) where it is nowhere so.
+template <class Energy>
+StepLength search_prediction_length(Energy&& energy, double e0, double slope) {
+  StepLength s;
+  const double e1 = energy(1.0);
+  const double curvature = e1 - e0 - slope;
+  s.alpha = !std::isfinite(e1) ? 0.5 : curvature > 0.0 ? std::clamp(-slope / (2.0 * curvature), 0.0, 1.0) : 1.0;
+  s.energy = s.alpha == 1.0 ? e1 : s.alpha > 0.0 ? energy(s.alpha) : e0;
+  s.trials = s.alpha == 1.0 || s.alpha == 0.0 ? 0 : 1;
+  for (int k = 0; k < 4 && s.alpha > 0.0 && !(s.energy < e0); ++k) {
+    s.alpha *= 0.5;
+    s.energy = energy(s.alpha);
+    ++s.trials;
+  }
+  if (!(s.energy < e0)) {
+    s.alpha = 0.0;
+    s.energy = e0;
+  }
+  return s;
+}
+
 }  // namespace fibra

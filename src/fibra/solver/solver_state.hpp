@@ -107,7 +107,7 @@ struct SolverProgress {
   double wall_time = 0;    ///< the run's wall time so far [s]
   // The step's increment control.
   double lambda = 0, dl = 0, last_dl = 0;
-  VecX last_motion;        ///< load steps: the last increment's motion (secant predictor)
+  VecX last_motion;        ///< load and weave steps: the last increment's motion (their predictors)
   int done = 0, attempts = 0, level_failures = 0;
   bool level_settled = true, relaxed = false, uncuttable = false;
   double failed_floor = 0, failed_first = -1, failed_dl = 0;

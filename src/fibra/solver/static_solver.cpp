@@ -262,12 +262,41 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   rules.release = positions_released && m_mode.test;
   rules.tolerance = m_mode.tolerance;
   rules.lambda = lambda;
+  // A predicted increment's start with its loads applied: where it is first detected, and where
+  // the search along the prediction starts.
+  if (m_mode.predicted) {
+    m_unpredicted = m_q_start;
+    const std::vector<char>& fixed = m_problem->fixed();
+    for (Index d = 0; d < m_q.size(); ++d)
+      if (fixed[d]) m_unpredicted[d] = m_q[d];
+    rules.first_detection = &m_unpredicted;
+  }
   ContactLoopHost host;
   host.minimize = [this](std::vector<double>& h, int& its, double& res) { return equilibrium(h, its, res); };
   host.pattern_changed = [this]() { pattern_changed(); };
   host.moved_residual = [this]() { return normal_update_residual(); };
+  host.search_prediction = [this]() { search_prediction(); };
   return m_contact_loop->solve(rules, host, m_q, m_q_start, history, iterations, residual, m_contact_stats, m_run,
                                m_refusal);
+}
+
+// The potential along the prediction is the increment's own: its contact elements, detected at
+// its start, their prescribed normals and offsets, its drag.
+// The bindings' proximal anchors are set at the start (the minimization sets them again where
+// it starts): left where the last solve set them, the search's potential depended on the state
+// a resumed run restores them to, and the run went on another way.
+void StaticSolver::search_prediction() {
+  const VecX motion = m_q - m_unpredicted;
+  m_problem->begin_lagged(m_unpredicted);
+  m_problem->set_energy_base(m_unpredicted);
+  const double e0 = m_problem->evaluate(m_unpredicted, &m_gradient, nullptr);
+  const double slope = m_gradient.dot(motion);
+  const StepLength found = search_prediction_length(
+      [&](double t) { return m_problem->evaluate(m_unpredicted + t * motion, nullptr, nullptr); }, e0, slope);
+  if (debug_newton())
+    fmt::print(stderr, " prediction searched: {:.3f} of it (potential {:.3e} at the start, slope {:.3e}; {:.3e} there)\n",
+               found.alpha, e0, slope, found.energy);
+  m_q = m_unpredicted + found.alpha * motion;
 }
 
 double StaticSolver::normal_update_residual() {
@@ -1132,12 +1161,12 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       const VecX saved = m_q;
       m_q_start = m_q;
       driver->predict(m_run, host, step_dl);
-      m_drag_anchor = m_q;
+      m_mode = driver->mode(m_run, step_dl);
+      m_drag_anchor = m_mode.predicted ? m_q_start : m_q;
       const LaggedStates saved_lagged = m_problem->save_lagged();
       std::vector<double> history;
       int iterations = 0;
       double residual = 0.0;
-      m_mode = driver->mode(m_run, step_dl);
       const bool ok = solve_increment(step, lambda + step_dl, history, iterations, residual);
       ++attempts;
       if (interrupt_flag().load()) {

@@ -134,6 +134,12 @@ class StaticSolver {
   /// (release_positions).
   bool solve_increment(int step, double lambda, std::vector<double>& history, int& iterations, double& residual,
                        bool positions_released = false);
+  /// A predicted increment (IncrementMode::predicted), its contact elements detected at its
+  /// start: moves the state back along the prediction, from the increment's start (its loads
+  /// applied, m_unpredicted) to the predicted state, to where the potential is lowest as the
+  /// parabola through the potential and its slope at the start and the potential at the
+  /// prediction has it, halved until below the start's (search_prediction_length).
+  void search_prediction();
   /// After a factorization of m_linear: its CG budget, and no CG solve counted against it yet.
   void begin_factor();
   /// The sparsity pattern changed (contact elements, a restored state): both solvers analyse it
@@ -206,6 +212,7 @@ class StaticSolver {
   VecX m_q;
   VecX m_q_start;  // state at the start of the current increment (friction slips, crossings)
   VecX m_drag_anchor;  // where the drag pulls: the increment's start, or a test level's predicted state
+  VecX m_unpredicted;  // a predicted increment's start with its loads applied (search_prediction)
   VecX m_gradient;
   VecX m_update_gradient;  // gradient at the converged state with updated normals (normal_update_residual)
   std::vector<double> m_hessian;

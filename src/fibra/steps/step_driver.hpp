@@ -6,7 +6,8 @@
 /// one kind of step to another is asked of the step's driver:
 /// - a load step (LoadDriver) predicts each increment from the last one's motion and ends at
 ///   full load;
-/// - a weave step (WeaveDriver) goes on at full load until the woven tows are apart;
+/// - a weave step (WeaveDriver) starts each increment from the last one's motion, searched
+///   along before Newton, and goes on at full load until the woven tows are apart;
 /// - a relax step (RelaxDriver) takes proximal increments, its drag adapted to how easy they
 ///   were, and ends once the drag's force is negligible and the normals and cones settled;
 /// - a biaxial or shear test (TestDriver) repeats each load level until it has so settled.
@@ -56,6 +57,11 @@ struct IncrementMode {
   /// penetration released over the step's first half, without friction; the normals and cones
   /// lagged (one solve, updated for the next increment).
   bool weave = false;
+  /// Weave: Newton starts from a prediction (WeaveDriver::predict) searched along before the
+  /// contact loops (StaticSolver::search_prediction); the drag holds the increment's start and
+  /// the first detection sees the start, so the increment solves the same problem as an
+  /// unpredicted one from a nearer starting point.
+  bool predicted = false;
   /// Relax and tests: the drag adapts (the section vectors and the motion along a fiber
   /// weighted as in the weave); the normals and cones lagged until the drag's force is below
   /// the step's tolerance, then iterated to their fixed point.
@@ -144,6 +150,7 @@ class WeaveDriver : public StepDriver {
   WeaveDriver(const StepSpec& st, const SolverSpec& opt, bool contact, double k0)
       : StepDriver(st, opt), m_contact(contact), m_k0(k0) {}
   void begin(SolverProgress& run) const override { run.relaxed = !m_contact; }
+  void predict(const SolverProgress& run, StepHost& host, double step_dl) const override;
   IncrementMode mode(const SolverProgress& run, double step_dl) const override;
   int converged(SolverProgress& run, StepHost& host, const SolvedIncrement& inc) const override;
   std::string stop(const SolverProgress& run, StepHost& host) const override;
