@@ -283,8 +283,9 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
 // The potential along the prediction is the increment's own: its contact elements, detected at
 // its start, their prescribed normals and offsets, its drag.
 // The bindings' proximal anchors are set at the start (the minimization sets them again where
-// it starts): left where the last solve set them, the search's potential depended on the state
-// a resumed run restores them to, and the run went on another way.
+// it starts): left where the last solve set them, the search's potential would differ in its
+// last digits between a run and the same run resumed from a checkpoint, which restores them
+// elsewhere, and the two would go on differently.
 void StaticSolver::search_prediction() {
   const VecX motion = m_q - m_unpredicted;
   m_problem->begin_lagged(m_unpredicted);
