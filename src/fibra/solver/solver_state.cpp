@@ -515,8 +515,11 @@ Checkpoint read_checkpoint_file(const std::string& path) {
     in.bad("a step's state, not a checkpoint: `--resume` goes on from state/checkpoint.bin");
   Checkpoint c;
   c.state = get_state(in, version);
-  const Index nodes = static_cast<Index>(
-      std::max<std::int64_t>(c.state.model.dofs - 6 * std::max<std::int64_t>(c.state.model.bodies, 0), 0) / 9);
+  // The file's counts as read (a corrupt file's may be anything): the bodies clamped to what its
+  // dofs can hold, so that 6 x bodies cannot overflow.
+  const std::int64_t dofs = std::max<std::int64_t>(c.state.model.dofs, 0);
+  const std::int64_t bodies = std::clamp<std::int64_t>(c.state.model.bodies, 0, dofs / 6);
+  const Index nodes = static_cast<Index>((dofs - 6 * bodies) / 9);
   c.progress = get_progress(in, c.state.model, nodes, version);
   c.run = in.text(std::uint64_t{1} << 32);
   c.case_text = in.text(std::uint64_t{1} << 32);
