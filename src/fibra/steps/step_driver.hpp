@@ -57,10 +57,10 @@ struct IncrementMode {
   /// penetration released over the step's first half, without friction; the normals and cones
   /// lagged (one solve, updated for the next increment).
   bool weave = false;
-  /// Weave: Newton starts from a prediction (WeaveDriver::predict) searched along before the
-  /// contact loops (StaticSolver::search_prediction); the drag holds the increment's start and
-  /// the first detection sees the start, so the increment solves the same problem as an
-  /// unpredicted one from a nearer starting point.
+  /// Weave: Newton starts from a prediction (WeaveDriver::predict), searched along once the
+  /// first detection's elements are set (StaticSolver::search_prediction); the drag holds the
+  /// increment's start and the first detection sees the start, so the increment solves the same
+  /// problem as an unpredicted one from a nearer starting point.
   bool predicted = false;
   /// Relax and tests: the drag adapts (the section vectors and the motion along a fiber
   /// weighted as in the weave); the normals and cones lagged until the drag's force is below
