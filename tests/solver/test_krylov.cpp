@@ -17,17 +17,17 @@
 namespace fibra::test {
 namespace {
 
-// A chain of 12 groups of 3 dofs, each coupled to the next two: a banded block pattern.
+// A chain of `groups` groups of 3 dofs, each coupled to the next two: a banded block pattern.
 struct Chain {
   StencilSet stencils;
   std::unique_ptr<BlockPattern> pattern;
-  Chain() {
-    for (Index g = 0; g + 2 < 12; ++g) {
+  explicit Chain(Index groups = 12) {
+    for (Index g = 0; g + 2 < groups; ++g) {
       const Index s[3] = {g, g + 1, g + 2};
       stencils.add(s);
     }
-    stencils.colorize(12, 2);
-    pattern = std::make_unique<BlockPattern>(std::vector<int>(12, 3), std::vector<const StencilSet*>{&stencils});
+    stencils.colorize(groups, 2);
+    pattern = std::make_unique<BlockPattern>(std::vector<int>(groups, 3), std::vector<const StencilSet*>{&stencils});
   }
   Index n() const { return pattern->rows(); }
   // Upper-triangle values of the dense symmetric matrix `a` (entries outside the pattern are
@@ -201,6 +201,45 @@ TEST(Krylov, ConjugateGradientsSolveAnSpdSystem) {
   EXPECT_FALSE(short_run.converged);
   EXPECT_EQ(short_run.iterations, 2);
   EXPECT_GT(short_run.relative_residual, 1e-14);
+}
+
+// A solve whose residual falls too slowly to reach its tolerance within `abandon_beyond`
+// iterations is given up early, and only then: diagonal matrices of 300 dofs whose eigenvalues
+// spread geometrically over a condition number of 1e6 (CG's residual falls slowly) and of 30
+// (it falls by about 0.7 per iteration), unpreconditioned, to 1e-10.
+TEST(Krylov, HopelessSolvesAreAbandonedEarly) {
+  const Chain c(100);
+  const VecX b = VecX::LinSpaced(c.n(), 1.0, 2.0), weight = VecX::Ones(c.n());
+  auto identity = [](const VecX& r, VecX& z) { z = r; };
+  PcgWorkspace ws;
+  VecX x;
+  auto diagonal = [&](double condition) {
+    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(c.n(), c.n());
+    for (Index i = 0; i < c.n(); ++i) a(i, i) = std::pow(condition, static_cast<double>(i) / (c.n() - 1));
+    return c.values(a);
+  };
+  for (const double condition : {1e6, 30.0}) {
+    const std::vector<double> a = diagonal(condition);
+    // Without the rule: the iterations it takes (at most 1,000).
+    const PcgResult full = pcg(*c.pattern, a, 0.0, b, x, identity, weight, 1e-10, 1000, ws);
+    ASSERT_FALSE(full.abandoned);
+    for (const int limit : {20, 40, 100, 400}) {
+      const PcgResult r = pcg(*c.pattern, a, 0.0, b, x, identity, weight, 1e-10, 1000, ws, limit);
+      if (!full.converged || full.iterations > 2 * limit) {
+        // Far beyond the limit: given up, and as soon as the rule looks (15 or 20 iterations).
+        EXPECT_TRUE(r.abandoned) << condition << " " << limit;
+        EXPECT_FALSE(r.converged);
+        EXPECT_LE(r.iterations, std::max(20, limit / 2)) << condition << " " << limit;
+      } else if (2 * full.iterations < limit) {
+        // Well within it: the same solve as without the rule.
+        EXPECT_FALSE(r.abandoned) << condition << " " << limit;
+        EXPECT_TRUE(r.converged);
+        EXPECT_EQ(r.iterations, full.iterations);
+      }
+      if (r.abandoned) EXPECT_GT(full.iterations, limit) << "abandoned a solve within the limit";
+    }
+    std::printf("condition %g: %d iterations to 1e-10 without the rule\n", condition, full.iterations);
+  }
 }
 
 TEST(Krylov, NegativeCurvatureIsABreakdown) {

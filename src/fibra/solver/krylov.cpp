@@ -52,9 +52,27 @@ void symmetric_multiply(const BlockPattern& pattern, const std::vector<double>& 
   }
 }
 
+namespace {
+
+// True when the residuals so far (history[k] after k iterations), falling at their rate over
+// the last kWindow iterations, reach `tolerance` only after more than `limit` iterations.
+bool hopeless(const std::vector<double>& history, double tolerance, int limit) {
+  constexpr int kFirst = 15, kEvery = 5, kWindow = 10;
+  const int k = static_cast<int>(history.size()) - 1;
+  if (k < kFirst || k % kEvery != 0) return false;
+  auto least = [&](int end) { return std::min({history[end - 2], history[end - 1], history[end]}); };
+  const double now = least(k), before = least(k - kWindow);
+  if (!(now > 0.0 && before > 0.0)) return false;
+  if (now >= before) return true;
+  const double rate = std::log(now / before) / kWindow;  // per iteration, < 0
+  return k + std::log(tolerance / now) / rate > limit;
+}
+
+}  // namespace
+
 PcgResult pcg(const BlockPattern& pattern, const std::vector<double>& values, double shift, const VecX& b, VecX& x,
               const std::function<void(const VecX&, VecX&)>& precondition, const VecX& weight, double tolerance,
-              int max_iterations, PcgWorkspace& ws) {
+              int max_iterations, PcgWorkspace& ws, int abandon_beyond) {
   PcgResult out;
   ws.history.clear();
   if (ws.history.capacity() < static_cast<size_t>(max_iterations) + 1) ws.history.reserve(max_iterations + 1);
@@ -90,6 +108,10 @@ PcgResult pcg(const BlockPattern& pattern, const std::vector<double>& values, do
     ws.r -= alpha * ws.ap;
     out.iterations = k + 1;
     if (done()) return out;
+    if (abandon_beyond > 0 && hopeless(ws.history, tolerance, abandon_beyond)) {
+      out.abandoned = true;
+      return out;
+    }
     precondition(ws.r, ws.z);
     const double rz_next = ws.r.dot(ws.z);
     ws.p = ws.z + (rz_next / rz) * ws.p;

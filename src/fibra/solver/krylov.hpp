@@ -20,6 +20,7 @@ void symmetric_multiply(const BlockPattern& pattern, const std::vector<double>& 
 struct PcgResult {
   bool converged = false;  ///< weighted residual below tolerance x weighted |b|
   bool breakdown = false;  ///< a search direction of non-positive curvature (matrix not SPD)
+  bool abandoned = false;  ///< stopped early: at its rate, the tolerance was beyond `abandon_beyond`
   int iterations = 0;      ///< preconditioner applications after the first
   double relative_residual = 0;  ///< |W (b - A x)| / |W b| at the end
 };
@@ -37,6 +38,10 @@ struct PcgWorkspace {
 /// (z = M^-1 r, M symmetric positive definite), starting from x = M^-1 b. Stops when
 /// |W (b - A x)| <= tolerance |W b| (W = diag(weight), the dofs' force scales) or after
 /// `max_iterations` further iterations; x holds the last iterate either way.
+/// With `abandon_beyond` > 0 it also stops, unconverged and `abandoned`, once the residual,
+/// falling at its geometric rate over the last 10 iterations, would reach the tolerance only
+/// after more than `abandon_beyond` iterations in all (judged every 5 iterations from the 15th,
+/// on the least of three successive residuals, since CG's residual is not monotone).
 /// The CG iterations preconditioned by an older factorization that a new one is worth: the
 /// budget of a solve before it gives up, and of the solves since the last factorization beyond
 /// the first one's iterations. Automatic (setting < 0): a factorization's flops over 16 times
@@ -50,6 +55,6 @@ int krylov_budget(int setting, double flops, double nonzeros);
 
 PcgResult pcg(const BlockPattern& pattern, const std::vector<double>& values, double shift, const VecX& b, VecX& x,
               const std::function<void(const VecX&, VecX&)>& precondition, const VecX& weight, double tolerance,
-              int max_iterations, PcgWorkspace& ws);
+              int max_iterations, PcgWorkspace& ws, int abandon_beyond = 0);
 
 }  // namespace fibra

@@ -583,9 +583,18 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       // so stops after a few CG iterations instead of going on to 1e-3 (docs/theory/solver.md,
       // "Reusing the factorization").
       const double forcing = std::clamp(0.5 * tolerance / residual, opt.method.krylov_tolerance, 0.1);
+      // Iterations to 1e-3-equivalent ones (the factor's age, below): CG's residual falls about
+      // geometrically, so iterations scale with the decades gained.
+      const double to_aged = std::log(opt.method.krylov_tolerance) / std::log(std::max(forcing, 1e-300));
+      // A solve that would take more than half the budget (in aged iterations) makes the next
+      // iteration factorize anyway: CG gives it up as soon as its rate shows it would take more
+      // than three quarters (the rate of its last iterations underestimates CG's later
+      // speed-up), and this iteration factorizes instead of paying for the rest of it
+      // (docs/theory/solver.md, "Reusing the factorization").
+      const int abandon_beyond = std::max(1, static_cast<int>(std::floor(0.75 * m_krylov_budget / to_aged)));
       const PcgResult cg = pcg(
           m_problem->pattern(), m_hessian, 0.0, m_rhs, dq, [this](const VecX& b, VecX& x) { m_linear->precondition(b, x); },
-          m_force_scale, forcing, m_krylov_budget, m_pcg);
+          m_force_scale, forcing, m_krylov_budget, m_pcg, abandon_beyond);
       m_stats.krylov_iterations += cg.iterations;
       solved = cg.converged;
       if (debug_newton()) {
@@ -595,7 +604,11 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
         for (size_t i = 0; i < trail.size(); ++i)
           if (i % 10 == 0 || i + 1 == trail.size()) trace += fmt::format(" {:.1e}", trail[i]);
         fmt::print(stderr, "  it {:2d} conjugate gradients: {} iterations, {} to {:.1e} ({:.2f} s); residual{}\n",
-                   iterations, cg.iterations, cg.converged ? "converged" : cg.breakdown ? "broke down" : "not converged",
+                   iterations, cg.iterations,
+                   cg.converged   ? "converged"
+                   : cg.breakdown ? "broke down"
+                   : cg.abandoned ? "abandoned"
+                                  : "not converged",
                    forcing, seconds_since(t0), trace);
       }
       if (solved) ++m_stats.reused_factorizations;
@@ -606,10 +619,8 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
       // settling solves took 32-54 iterations each with an aged factor against 3-15 with a
       // fresh one, seven solves in a row below the per-solve threshold.
       // (Counted in iterations, not seconds: the solver's path stays the same from run to run.)
-      // The factor's age is judged on the iterations the solve would have taken to 1e-3 (CG's
-      // residual falls about geometrically: iterations scale with the decades gained).
-      const int aged = static_cast<int>(
-          std::lround(cg.iterations * std::log(opt.method.krylov_tolerance) / std::log(std::max(forcing, 1e-300))));
+      // The factor's age is judged on the iterations the solve would have taken to 1e-3.
+      const int aged = static_cast<int>(std::lround(cg.iterations * to_aged));
       if (solved) {
         if (m_fresh_cg < 0) m_fresh_cg = aged;
         m_cg_excess += std::max(0, aged - m_fresh_cg);
