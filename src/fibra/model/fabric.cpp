@@ -253,7 +253,10 @@ std::vector<Eigen::Vector2d> pack_ellipse(int count, double r, double width, dou
         const double ymin = phase == 1 ? 0.5 * h / b : 0.0;
         const double beyond = std::pow((count + 2.5) * d / a, 2) + ymin * ymin;
         s = nearest(lattice_sites(d, phase, r, a, b, paired, count + 2), phase);
-        if (s.empty() || !(measure(s.back()) < beyond * (1.0 - 1e-9)))
+        // The margin covers the few roundings of a measure (a relative 1e-9 hid the columns'
+        // term, (count + 2.5)^2 (d / a)^2, on a tow 1e7 times wider than thick, and the whole
+        // lattice was listed at every step).
+        if (s.empty() || !(measure(s.back()) < beyond * (1.0 - 1e-14)))
           s = nearest(lattice_sites(d, phase, r, a, b, paired), phase);
       } else {
         s = nearest(lattice_sites(d, phase, r, a, b, paired), phase);
@@ -342,6 +345,13 @@ void expand_fabric(Case& c) {
                        fmt::format("a tow needs at least 3 fibers (its end bodies follow them in average and need "
                                    "3 not on one line to define a mean rotation), got {}",
                                    s.tow.fibers));
+    // A section more than 1e3 times wider than thick is no tow's (the reader holds the
+    // thickness within the width); the packing's lattice would have millions of columns.
+    if (s.tow.width > 1e3 * s.tow.thickness)
+      throw InputError(file, key + ".tow.width",
+                       fmt::format("a tow section of {:.6g} m by {:.6g} m (width by thickness) is more than 1000 times "
+                                   "wider than thick",
+                                   s.tow.width, s.tow.thickness));
     if (s.tows > 1 && s.spacing < s.tow.width)
       throw InputError(file, key + ".spacing",
                        fmt::format("spacing {:.6g} m is smaller than the tow width {:.6g} m: neighbouring {} tows "
