@@ -253,9 +253,9 @@ std::vector<Eigen::Vector2d> pack_ellipse(int count, double r, double width, dou
         const double ymin = phase == 1 ? 0.5 * h / b : 0.0;
         const double beyond = std::pow((count + 2.5) * d / a, 2) + ymin * ymin;
         s = nearest(lattice_sites(d, phase, r, a, b, paired, count + 2), phase);
-        // The margin covers the few roundings of a measure (a relative 1e-9 hid the columns'
-        // term, (count + 2.5)^2 (d / a)^2, on a tow 1e7 times wider than thick, and the whole
-        // lattice was listed at every step).
+        // The margin covers the few roundings of a measure, no more: a larger one (1e-9) would
+        // hide the columns' term, (count + 2.5)^2 (d / a)^2, on a very flat section, and the
+        // whole lattice would be listed at every step.
         if (s.empty() || !(measure(s.back()) < beyond * (1.0 - 1e-14)))
           s = nearest(lattice_sites(d, phase, r, a, b, paired), phase);
       } else {
