@@ -35,8 +35,9 @@ struct IncrementInfo {
   double wall_time = 0;        ///< since the start of the run [s]
   double increment_time = 0;   ///< spent on this increment, failed attempts included [s]
   bool step_end = false;       ///< last increment of its step
-  /// An equilibrium without drag: false for the increments of a biaxial or shear step that
-  /// repeat a load level until its drag force is negligible (their curves skip them).
+  /// An equilibrium without drag: false for the increments of a biaxial or shear step, or of
+  /// a load step held by its drag, that repeat a load level until its drag force is negligible
+  /// (their curves skip them).
   bool settled = true;
   std::vector<double> reactions;  ///< per reaction column (see reaction_columns())
   ContactStats contact;           ///< contact statistics (zero without contact)
