@@ -242,9 +242,9 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   // the last 2-4 changed the edge forces by less than 1e-5 of the reference force
   // (docs/performance.md, "Test levels"); the 480-fiber twill's relax settled in 7 increments
   // of 8-21 iterations, where solved to residual_tolerance its settling increments took up to
-  // 56 (docs/performance.md, "Run times"). A test level's release, a point of the curves, is solved as its settling increments
-  // are; a relax step's, the woven state every test and export starts from, to
-  // residual_tolerance (its bindings then hold to binding_tolerance).
+  // 56 (docs/performance.md, "Run times"). A test level's release, a point of the curves, is
+  // solved as its settling increments are; a relax step's, the woven state every test and
+  // export starts from, to residual_tolerance (its bindings then hold to binding_tolerance).
   // A test's first loading increment has no earlier loading increment to expect its drag
   // force from: its first minimization measures it (equilibrium()). Solved to
   // pseudo_tolerance (1e-6 of the reference force) instead, the 480-fiber plain shear's (a
