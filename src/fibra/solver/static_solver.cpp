@@ -1171,7 +1171,8 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       failed_refusal.clear();
       m_run.settling_residual = std::numeric_limits<double>::infinity();
       // A step's first loading increment expects nothing of an earlier step's (a test after
-      // another, or after a held load step, whose drag force is measured against its load).
+      // another, or after a held load step, whose drag force is measured against its load),
+      // nor does a relax step's first increment (solve_increment: solved to pseudo_tolerance).
       m_run.load_residual = 0.0;
       m_run.relax_residual = 0.0;
       driver->begin(m_run);

@@ -20,8 +20,9 @@ SolverSpec Reader::read_solver(const Value& t, const std::string& path) const {
   expect_table(t, path);
   // Former settings of the method, now its own rules (docs/theory/solver.md): named as such,
   // not as unknown keys.
-  static const Keys kRules = {"line_search", "test_predictor", "ordering", "binding_stiffness", "max_step",
-                              "weave_drag", "relax_drag", "drag_axial", "test_inexact", "relax_inexact", "test_penetration_slack",
+  static const Keys kRules = {"line_search",      "test_predictor",    "ordering",         "binding_stiffness",
+                              "max_step",         "weave_drag",        "relax_drag",       "drag_axial",
+                              "test_inexact",     "relax_inexact",     "test_penetration_slack",
                               "pseudo_tolerance", "krylov_iterations", "krylov_tolerance"};
   for (std::string_view name : kRules)
     if (const Value* v = find(t, name))
