@@ -229,9 +229,6 @@ struct SolverMethod {
   double drag_axial = 1e-2;               ///< weave, relax and test steps' drag: weight of a node's motion along its fiber (1: isotropic)
   double test_inexact = 0.01;             ///< tests: Newton tolerance of pseudo-time increments / the drag force they leave, of settling ones / the step's tolerance (0: off)
   double relax_inexact = 0.01;            ///< relax steps: the same, but the release that ends the step is solved to residual_tolerance (0: off)
-  /// Relax and test steps: a Newton solve that has not once brought its residual below its
-  /// first in half its iterations gives up there (the increment is tried again at a stiffer drag).
-  bool stagnation_gives_up = true;
   double test_penetration_slack = 0.05;   ///< tests: a settled level's deepest penetration may exceed the cap by this fraction
   bool test_predictor = true;             ///< tests: each load level starts from the interior moved like the edges (interpolated)
   /// Held load steps (LoadDriver): a level is settled once the drag's force and the residual

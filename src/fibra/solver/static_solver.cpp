@@ -192,7 +192,6 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
   m_refusal.clear();
   m_newton_tolerance = m_case.solver.residual_tolerance;
   m_tolerance_from_drag = false;
-  m_stagnation_gives_up = false;
   if (!m_contact) return equilibrium(history, iterations, residual);
   // How the step's driver has the increment solved (steps/step_driver.hpp): the weave's
   // prescribed normals, or proximal increments (relax and tests), and the drag.
@@ -256,15 +255,6 @@ bool StaticSolver::solve_increment(int step, double lambda, std::vector<double>&
     const SolverMethod& method = m_case.solver.method;
     loosen_tolerance((m_mode.test ? method.test_inexact : method.relax_inexact) * expected);
   }
-  // A relax or test increment that fails is tried again from its start at four times the drag:
-  // a solve whose residual has not once fallen below its first in half its iterations gives up
-  // there instead of spending the other half (newton(), method.stagnation_gives_up). On the
-  // 3 x 3 x 16 twill a relax solve at 2.2 N/m went from 5.0e-2 to 0.13 in 12 iterations and
-  // failed at its 25th at 0.58; the slowest solve that converged (0.8 to 0.6 in 11 iterations,
-  // converged at its 23rd) goes on. Not a release, nor a held load step (their failures are
-  // not retried at a stiffer drag).
-  m_stagnation_gives_up = m_case.solver.method.stagnation_gives_up && relax && !m_mode.held && m_mode.drag > 0.0 &&
-                          !positions_released;
   const bool test_with_drag = m_mode.test && m_mode.drag > 0.0;
 
   // The contact loops (solver/contact_loop.hpp): detection passes, the normals and cones to
@@ -581,13 +571,6 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
     }
     prev_small_step = small_step;
     if (iterations >= opt.max_iterations * m_iteration_factor) return false;
-    if (m_stagnation_gives_up && 2 * iterations >= opt.max_iterations * m_iteration_factor &&
-        *std::min_element(history.begin() + static_cast<std::ptrdiff_t>(first) + 1, history.end()) >= history[first]) {
-      if (debug_newton())
-        fmt::print(stderr, "  it {:2d} no residual below the first ({:.3e}): the solve gives up\n", iterations,
-                   history[first]);
-      return false;
-    }
     if (iterations >= 4 && residual > 1e6 * history.front() && history.front() > 0) return false;
 
     // Solve H dq = -r. First by conjugate gradients preconditioned with the last factorization
