@@ -242,6 +242,8 @@ TEST(Weaving, TwillSectionsTurnAtTheEndsOfFloatsPlainSectionsStayLevel) {
 //    weave step (the tension straightens the tows until the crossings hold them), warp and
 //    weft alike within 15 %.
 const std::string kPlainFriction = test::plain_friction_sample();
+/// The friction sample's pull on edge.x+ (and y+) [N]: N per fiber x fibers per tow x tows.
+constexpr double kPlainFrictionPull = 0.5 * 3 * 2;
 
 /// The friction sample with a [solver] table of these keys (one per line) and these steps after it.
 
@@ -271,7 +273,7 @@ TEST(Weaving, PlainWeaveWithFrictionRelaxesToEquilibrium) {
       if (s.model.bodies[b].name.rfind("edge.", 0) == 0) sum += info.bodies[b].force;
     return sum;
   };
-  const double pull = 0.5 * 3 * 2;  // N per fiber x fibers per tow x tows, on edge.x+ (and y+)
+  const double pull = kPlainFrictionPull;
   const int xp = s.model.body_index("edge.x+"), yp = s.model.body_index("edge.y+");
   ASSERT_GE(xp, 0);
   ASSERT_GE(yp, 0);
@@ -647,11 +649,10 @@ TEST(Weaving, InexactRelaxSolvesSaveIterationsNotTheWovenShape) {
               inexact.stats.iterations, exact.stats.iterations, a.warp_crimp, b.warp_crimp, a.weft_crimp, b.weft_crimp,
               a.thickness, b.thickness);
   EXPECT_LT(inexact.stats.iterations, exact.stats.iterations);
-  const double pull = 0.5 * 3 * 2;  // N on edge.x+ (and y+): N per fiber x fibers per tow x tows
   for (const test::Solved* s : {&inexact, &exact}) {
     const IncrementInfo& relaxed = s->step_end_info.back();
     EXPECT_LE(relaxed.relax_residual, 1e-4);
-    EXPECT_LT(edge_force_sum(relaxed, edges_of(*s)).norm(), 1e-4 * pull);
+    EXPECT_LT(edge_force_sum(relaxed, edges_of(*s)).norm(), 1e-4 * kPlainFrictionPull);
   }
   EXPECT_NEAR(a.warp_crimp, b.warp_crimp, 0.01 * b.warp_crimp);
   EXPECT_NEAR(a.weft_crimp, b.weft_crimp, 0.01 * b.weft_crimp);
