@@ -245,6 +245,21 @@ const std::string kPlainFriction = test::plain_friction_sample();
 /// The friction sample's pull on edge.x+ (and y+) [N]: N per fiber x fibers per tow x tows.
 constexpr double kPlainFrictionPull = 0.5 * 3 * 2;
 
+// The fabric's four edge bodies, and the sum of their forces on it at an increment.
+struct Edges {
+  int xm, xp, ym, yp;
+  // Distances between the warp edges (along x) and the weft edges (along y) at an increment.
+  double lx(const IncrementInfo& i) const { return i.bodies[xp].center.x() - i.bodies[xm].center.x(); }
+  double ly(const IncrementInfo& i) const { return i.bodies[yp].center.y() - i.bodies[ym].center.y(); }
+};
+Edges edges_of(const test::Solved& s) {
+  return {s.model.body_index("edge.x-"), s.model.body_index("edge.x+"), s.model.body_index("edge.y-"),
+          s.model.body_index("edge.y+")};
+}
+Vec3 edge_force_sum(const IncrementInfo& info, const Edges& e) {
+  return info.bodies[e.xm].force + info.bodies[e.xp].force + info.bodies[e.ym].force + info.bodies[e.yp].force;
+}
+
 /// The friction sample with a [solver] table of these keys (one per line) and these steps after it.
 
 TEST(Weaving, PlainWeaveWithFrictionRelaxesToEquilibrium) {
@@ -266,19 +281,12 @@ TEST(Weaving, PlainWeaveWithFrictionRelaxesToEquilibrium) {
   // within 0.1 um; now 23, 221 and 15.
   EXPECT_LT(s.stats.binding_updates, 60);
   EXPECT_LT(s.stats.iterations, 600);
-  // Sum of the forces of the four edge bodies on the fabric.
-  auto edge_sum = [&](const IncrementInfo& info) {
-    Vec3 sum = Vec3::Zero();
-    for (size_t b = 0; b < s.model.bodies.size(); ++b)
-      if (s.model.bodies[b].name.rfind("edge.", 0) == 0) sum += info.bodies[b].force;
-    return sum;
-  };
   const double pull = kPlainFrictionPull;
-  const int xp = s.model.body_index("edge.x+"), yp = s.model.body_index("edge.y+");
-  ASSERT_GE(xp, 0);
-  ASSERT_GE(yp, 0);
-  EXPECT_NEAR(relaxed.bodies[xp].force.x(), pull, 1e-6 * pull);
-  EXPECT_NEAR(relaxed.bodies[yp].force.y(), pull, 1e-6 * pull);
+  const Edges e = edges_of(s);
+  for (int b : {e.xm, e.xp, e.ym, e.yp}) ASSERT_GE(b, 0);
+  EXPECT_NEAR(relaxed.bodies[e.xp].force.x(), pull, 1e-6 * pull);
+  EXPECT_NEAR(relaxed.bodies[e.yp].force.y(), pull, 1e-6 * pull);
+  auto edge_sum = [&e](const IncrementInfo& info) { return edge_force_sum(info, e); };
   const Vec3 balance = edge_sum(relaxed);
   std::printf("relaxed: edge forces sum to (%.3e, %.3e, %.3e) N; at the end of the weave step (%.3e, %.3e, %.3e) N\n",
               balance.x(), balance.y(), balance.z(), edge_sum(woven).x(), edge_sum(woven).y(), edge_sum(woven).z());
@@ -383,19 +391,6 @@ TEST(Weaving, GrippedTowEndsKeepTheirFibersAcrossTheTow) {
 // Mechanical tests of the woven sample (METHOD §7): the friction test's 2 x 2 fabric, woven and
 // relaxed, then a biaxial or shear step. Each load level of such a step is repeated until the
 // drag force is below test_tolerance, so each settled increment is an equilibrium.
-struct Edges {
-  int xm, xp, ym, yp;
-  // Distances between the warp edges (along x) and the weft edges (along y) at an increment.
-  double lx(const IncrementInfo& i) const { return i.bodies[xp].center.x() - i.bodies[xm].center.x(); }
-  double ly(const IncrementInfo& i) const { return i.bodies[yp].center.y() - i.bodies[ym].center.y(); }
-};
-Edges edges_of(const test::Solved& s) {
-  return {s.model.body_index("edge.x-"), s.model.body_index("edge.x+"), s.model.body_index("edge.y-"),
-          s.model.body_index("edge.y+")};
-}
-Vec3 edge_force_sum(const IncrementInfo& info, const Edges& e) {
-  return info.bodies[e.xm].force + info.bodies[e.xp].force + info.bodies[e.ym].force + info.bodies[e.yp].force;
-}
 test::Solved woven_then(const std::string& step) {
   return test::solve_toml(kPlainFriction + step, "tested.toml");
 }
