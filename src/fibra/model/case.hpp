@@ -240,6 +240,7 @@ struct SolverMethod {
   /// iteration; > 0 = that many.
   int krylov_iterations = -1;
   double krylov_tolerance = 1e-3;         ///< CG stops at this residual relative to the Newton residual (inexact Newton)
+  double krylov_tolerance_pseudo = 3e-2;  ///< the same in pseudo-time increments (weave; relax and test increments with lagged normals)
   double max_step = -1;                   ///< largest motion per Newton iteration [m]; < 0 = half the smallest radius with contact, none without; 0 = none
   double binding_stiffness = 0;           ///< penalty of the augmented Lagrangian [N/m]; 0 = automatic
 };

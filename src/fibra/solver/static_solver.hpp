@@ -239,6 +239,7 @@ class StaticSolver {
   // the reference force's floor only [N] (what a held load step measures against).
   double m_load_force = 0;
   double m_newton_tolerance = 0;  // residual tolerance of the current Newton solves (relative; >= residual_tolerance)
+  bool m_pseudo_time = false;  // the increment being solved is a pseudo-time one (lagged normals and cones)
   bool m_tolerance_from_drag = false;  // the next minimization's drag force sets the Newton tolerance (equilibrium())
   IncrementMode m_mode;          // how the increment being solved is solved (its step's driver)
   int m_iteration_factor = 1;    // the current increment may take this many times max_iterations (1, 2 or 4)
