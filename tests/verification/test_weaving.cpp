@@ -12,17 +12,16 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <functional>
 #include <map>
 #include <numbers>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "fibra/model/fabric.hpp"
 #include "fibra/model/fabric_report.hpp"
 #include "support/fabric_cases.hpp"
+#include "support/scratch_dir.hpp"
 #include "verification/verification_support.hpp"
 
 namespace fibra {
@@ -731,12 +730,10 @@ TEST(FabricTests, LooserCgInPseudoTimeIncrementsSavesCgNotTheCurve) {
     ASSERT_EQ(tight.forces.size(), 2u);
     for (size_t k = 0; k < 2; ++k) EXPECT_NEAR(loose.forces[k], tight.forces[k], 0.005 * std::abs(tight.forces[k]));
   }
-  std::ifstream in(std::string(FIBRA_SOURCE_DIR) + "/tests/robustness/cases/helix_pulled_straight.toml");
-  std::stringstream helix;
-  helix << in.rdbuf();
-  ASSERT_FALSE(helix.str().empty());
-  const test::Solved a = test::solve_toml(helix.str(), "helix_loose.toml", [](Case& c) { c.solver.method.krylov_tolerance_pseudo = 3e-2; });
-  const test::Solved b = test::solve_toml(helix.str(), "helix_tight.toml", [](Case& c) { c.solver.method.krylov_tolerance_pseudo = 1e-3; });
+  const std::string helix = test::slurp(std::string(FIBRA_SOURCE_DIR) + "/tests/robustness/cases/helix_pulled_straight.toml");
+  ASSERT_FALSE(helix.empty());
+  const test::Solved a = test::solve_toml(helix, "helix_loose.toml", [](Case& c) { c.solver.method.krylov_tolerance_pseudo = 3e-2; });
+  const test::Solved b = test::solve_toml(helix, "helix_tight.toml", [](Case& c) { c.solver.method.krylov_tolerance_pseudo = 1e-3; });
   ASSERT_TRUE(a.converged()) << a.result.message;
   ASSERT_TRUE(b.converged()) << b.result.message;
   EXPECT_GT(a.stats.krylov_iterations, 0);
