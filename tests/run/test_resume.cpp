@@ -10,6 +10,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -207,6 +208,40 @@ TEST_F(Resume, AnInterruptedRunGoesOnFromItsLastIncrementWhateverTheCheckpointRa
   ASSERT_EQ(resumed.code, 0) << resumed.err;
   EXPECT_GE(summary(m_dir / "interrupted")["resumed_from"]["total_increments"].get<int>(), 45);
   expect_same_outputs("interrupted");
+}
+
+TEST_F(Resume, ARunInterruptedWithinAnIncrementGoesOnFromTheIncrementBefore) {
+  // Ctrl-C just before the last Newton iteration of each step's last increment
+  // (FIBRA_DEBUG_INTERRUPT): within the relax's release and the test levels' releases, the
+  // solves a converged increment adds. The increment is the interrupted one: the run goes on
+  // from the one before, as if never stopped.
+  write_case(resume_case("\"auto\""));
+  ASSERT_NO_FATAL_FAILURE(run_whole());
+  ASSERT_EQ(summary(m_dir / "whole")["solver"]["cuts"], 0) << "the iterations below count converged increments only";
+  const Rows rows = history(m_dir / "whole");
+  const auto column = std::find(rows[0].begin(), rows[0].end(), "iterations");
+  ASSERT_NE(column, rows[0].end());
+  // Each step's last increment of two or more iterations (with one, the iteration before its
+  // last is the previous increment's), and the run's Newton iterations up to its end.
+  std::map<std::string, std::pair<int, int>> last;  // step: (increment, iterations to its end)
+  int total = 0;
+  for (size_t k = 2; k < rows.size(); ++k) {
+    const int its = std::stoi(rows[k][column - rows[0].begin()]);
+    total += its;
+    if (its >= 2) last[rows[k][0]] = {static_cast<int>(k - 1), total};
+  }
+  ASSERT_EQ(last.size(), 4u);
+  for (const auto& [step, at] : last) {
+    const std::string dir = "interrupted_" + step;
+    const CliResult stopped = run_fibra(m_dir, "run case.toml --out " + dir + " --threads 2",
+                                        "FIBRA_DEBUG_INTERRUPT=" + std::to_string(at.second));
+    EXPECT_EQ(stopped.code, 130) << step << ": " << stopped.err;
+    EXPECT_EQ(summary(m_dir / dir)["status"], "interrupted") << step;
+    const CliResult resumed = run_fibra(m_dir, "run case.toml --out " + dir + " --threads 2 --resume");
+    ASSERT_EQ(resumed.code, 0) << step << ": " << resumed.err;
+    EXPECT_EQ(summary(m_dir / dir)["resumed_from"]["total_increments"], at.first - 1) << step;
+    expect_same_outputs(dir);
+  }
 }
 
 TEST_F(Resume, AutoCheckpointsAtStepEndsOnShortSteps) {

@@ -27,4 +27,12 @@ inline int debug_kill_increment() {
   return n;
 }
 
+/// FIBRA_DEBUG_INTERRUPT=N: the run is interrupted (as by Ctrl-C) just before its N-th Newton
+/// iteration (counted as summary.json's "iterations", a resumed run's included): the tests of
+/// `fibra run --resume` interrupt runs within chosen increments with it. 0 when unset.
+inline int debug_interrupt_iteration() {
+  static const int n = std::getenv("FIBRA_DEBUG_INTERRUPT") ? std::atoi(std::getenv("FIBRA_DEBUG_INTERRUPT")) : 0;
+  return n;
+}
+
 }  // namespace fibra

@@ -529,6 +529,7 @@ bool StaticSolver::newton(std::vector<double>& history, int& iterations, double&
 
   m_problem->evaluate(m_q, &m_gradient, &m_hessian);
   for (iterations = 0;; ++iterations) {
+    if (debug_interrupt_iteration() == m_stats.iterations + 1) interrupt_flag() = true;  // tests of --resume
     if (interrupt_flag().load()) return false;
     // Residual on free dofs and reference force (external loads and reactions).
     double ext = 0.0, react = 0.0, res = 0.0;
@@ -1205,7 +1206,9 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       double residual = 0.0;
       const bool ok = solve_increment(step, lambda + step_dl, history, iterations, residual);
       ++attempts;
-      if (interrupt_flag().load()) {
+      // An interrupted increment is not converged (a solve it cut short returned false), and
+      // the run stops at the last one that is: the checkpoint the run writes is that one's.
+      auto interrupted = [&] {
         m_q = saved;
         result.status = RunResult::Status::Interrupted;
         result.message = "interrupted by the user";
@@ -1213,7 +1216,8 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
         result.load_factor = lambda;
         result.attempted_load_factor = lambda + step_dl;
         return result;
-      }
+      };
+      if (interrupt_flag().load()) return interrupted();
       if (!ok) {
         failed_state = m_q;
         failed_refusal = m_refusal;
@@ -1283,6 +1287,10 @@ RunResult StaticSolver::run(const std::function<void(const IncrementInfo&, const
       solved.start = &saved;
       solved.state = &m_q;
       iterations += driver->converged(m_run, host, solved);
+      // The solves a converged increment may add (a relax's or a test level's release) stop
+      // at an interrupt too, as not converged, and the increment would go on with what they
+      // left (the dragged state): the increment is the interrupted one, not a converged one.
+      if (interrupt_flag().load()) return interrupted();
       if (debug_newton() && m_mode.proximal)
         fmt::print(stderr, " drag {:.3e} N/m per node, its force {:.3e} of the {}, normals {}settled; next drag {:.3e} N/m\n",
                    solved.drag, m_run.relax_residual, m_mode.held ? "load" : "reference force",
