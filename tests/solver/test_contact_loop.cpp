@@ -36,10 +36,10 @@ struct Outcome {
 
 // One increment's loops with the rules of a test level's settling increment (normals iterated,
 // the level's tolerance 1e-3); `release` as StaticSolver::release_positions sets it. Each
-// "minimization" moves fiber b along x by 2e-5 m, so that the normals between the section
-// centres turn by 1e-2 rad (beyond the 1e-3 rad of their tolerance) at every update, and the
+// "minimization" moves fiber b along x by `slide` (2e-5 m: the normals between the section
+// centres turn by 1e-2 rad, beyond the 1e-3 rad of their tolerance, at every update), and the
 // residual with the updated normals is read from `moved` in turn.
-Outcome run_loop(bool release, const std::vector<double>& moved) {
+Outcome run_loop(bool release, const std::vector<double>& moved, double slide = 2e-5) {
   const Case c = parse_case_toml(kPressedCrossing, "crossing.toml");
   const Model model = build_model(c);
   ContactManager manager(model, c.contact);
@@ -60,7 +60,7 @@ Outcome run_loop(bool release, const std::vector<double>& moved) {
   rules.lambda = 1.0;
   ContactLoopHost host;
   host.minimize = [&](std::vector<double>& history, int& iterations, double& residual) {
-    for (Index n = b.first_node; n < b.first_node + b.num_nodes; ++n) q[kNodeDofs * n] += 2e-5;
+    for (Index n = b.first_node; n < b.first_node + b.num_nodes; ++n) q[kNodeDofs * n] += slide;
     ++out.minimizations;
     iterations = 1;
     residual = 0.0;
@@ -103,6 +103,28 @@ TEST(ContactLoop, AReleaseWhoseNormalsSettleIsAccepted) {
   EXPECT_TRUE(release.accepted) << release.refusal;
   EXPECT_TRUE(release.normals_settled);
   EXPECT_EQ(release.minimizations, 4);
+}
+
+// Fiber b slides 3e-4 m along fiber a per minimization: after the first, the particles of the
+// pressed pair lie 0.15 of their radii' sum apart across its normal, and the pair no longer
+// describes the contact. A settling increment ends at that update, however its residual with
+// the updated normals falls, and the next one detects afresh; a release, with no next
+// increment, iterates on (here until fiber b has slid off the pair, which then carries no force
+// and has settled).
+TEST(ContactLoop, ASettlingIncrementEndsWhereItsPairsNoLongerFaceEachOther) {
+  const std::vector<double> halving = {1e-2, 4e-3, 1.5e-3, 8e-4};
+  const Outcome slid = run_loop(false, halving, 3e-4);
+  EXPECT_TRUE(slid.accepted) << slid.refusal;
+  EXPECT_FALSE(slid.normals_settled);
+  EXPECT_EQ(slid.minimizations, 1);
+  const Outcome near = run_loop(false, halving);  // 0.01 of the radii per minimization: settles
+  EXPECT_TRUE(near.accepted) << near.refusal;
+  EXPECT_TRUE(near.normals_settled);
+  EXPECT_EQ(near.minimizations, 4);
+  const Outcome release = run_loop(true, halving, 3e-4);
+  EXPECT_TRUE(release.accepted) << release.refusal;
+  EXPECT_TRUE(release.normals_settled);
+  EXPECT_EQ(release.minimizations, 2);
 }
 
 }  // namespace

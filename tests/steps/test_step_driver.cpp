@@ -331,6 +331,17 @@ TEST(StepDrivers, ARelaxEndsAtFullLoadOnceItsDragForceIsNegligibleAndItsNormalsS
   EXPECT_DOUBLE_EQ(run.relax_drag, 10.0);
   d.converged(run, host, solved(0.0, 20, 2.9e-3));
   EXPECT_DOUBLE_EQ(run.relax_drag, 5.0);
+  // Nothing the drag holds still moves (its force below a tenth of the tolerance): the
+  // residual with the updated normals stalls, but a weaker drag would only free what it holds.
+  host.drag_residual = 0.09 * st.tolerance;
+  d.converged(run, host, solved(0.0, 5, 2.8e-3));
+  EXPECT_DOUBLE_EQ(run.relax_drag, 5.0);
+  d.converged(run, host, solved(0.0, 5, 2.8e-3));
+  EXPECT_DOUBLE_EQ(run.relax_drag, 5.0);
+  // At a tenth of it, the creep goes on.
+  host.drag_residual = 0.1 * st.tolerance;
+  d.converged(run, host, solved(0.0, 5, 2.8e-3));
+  EXPECT_DOUBLE_EQ(run.relax_drag, 1.25);
   EXPECT_TRUE(host.released.empty());
   // Settled: the step ends, solved on with the positions released (its iterations returned).
   run.normals_settled = true;

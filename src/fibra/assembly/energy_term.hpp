@@ -35,6 +35,7 @@ struct FixedPointChange {
   double turn = 0;       ///< largest turn of a lagged direction that carries force (a contact normal) [rad]
   double idle_turn = 0;  ///< largest turn of one that carries none [rad]
   double relative = 0;   ///< largest change of a lagged force, relative to the largest such force (a friction cone's normal force)
+  double slide = 0;      ///< largest distance across its normal between a loaded pair's particles, relative to their radii' sum
 };
 
 /// An energy term on the model's dofs (9 per node, then 6 per rigid body).

@@ -166,7 +166,8 @@ std::vector<ContactElement> ContactManager::detect(const VecX& q, const VecX& q_
   return std::move(det.elements);
 }
 
-double ContactManager::update_normals(std::vector<ContactElement>& contacts, const VecX& q, double* idle_turn) const {
+double ContactManager::update_normals(std::vector<ContactElement>& contacts, const VecX& q, double* idle_turn,
+                                      double* slide) const {
   // New normals between section centres. An element with no force at q under its old normal
   // nor under its new one (gap >= 0 with both: the penalty law and the friction cone, frozen at
   // the normal force, are zero) takes its new normal at once; the others only if one of them
@@ -174,7 +175,7 @@ double ContactManager::update_normals(std::vector<ContactElement>& contacts, con
   // normals it was solved with (forces and reactions balance exactly). Measuring the turn on
   // every element let a pair of sliding fibers with no force between them (their section
   // centres drifting apart along the fibers) keep a relax from settling.
-  double turn = 0.0, idle = 0.0, worst_slide = 0.0;
+  double turn = 0.0, idle = 0.0, worst_slide = 0.0, largest_slide = 0.0;
   size_t worst = contacts.size();
   std::vector<Vec3> fresh(contacts.size());
   std::vector<char> loaded(contacts.size(), 0);
@@ -190,9 +191,13 @@ double ContactManager::update_normals(std::vector<ContactElement>& contacts, con
                             particle_position(c.a, q.data() + m_model.elements[c.a.element].first_dof);
     if (gap_vector.dot(c.normal) + c.offset < 0.0 || gap_vector.dot(fresh[k]) + c.offset < 0.0) {
       loaded[k] = 1;
+      const Section& sa = m_model.sections[m_model.elements[c.a.element].section];
+      const Section& sb = m_model.sections[m_model.elements[c.b.element].section];
+      const double across = (gap_vector - gap_vector.dot(c.normal) * c.normal).norm();
+      largest_slide = std::max(largest_slide, across / (std::min(sa.a, sa.b) + std::min(sb.a, sb.b)));
       if (angle > turn) {
         worst = k;
-        worst_slide = (gap_vector - gap_vector.dot(c.normal) * c.normal).norm();
+        worst_slide = across;
       }
       turn = std::max(turn, angle);
     } else {
@@ -204,6 +209,7 @@ double ContactManager::update_normals(std::vector<ContactElement>& contacts, con
     for (size_t k = 0; k < contacts.size(); ++k)
       if (loaded[k]) contacts[k].normal = fresh[k];
   if (idle_turn) *idle_turn = idle;
+  if (slide) *slide = largest_slide;
   if (debug_newton() && worst < contacts.size())
     fmt::print(stderr, " largest turn with force: element {} (zone {}), its particles slid {:.3e} m apart along the old normal's plane\n",
                worst, contacts[worst].zone, worst_slide);

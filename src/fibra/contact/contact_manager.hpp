@@ -46,8 +46,11 @@ class ContactManager {
   /// energy is zero before and after, the equilibrium does not see it. The others take theirs
   /// only if one of them turned by the normal tolerance or more, and then all at once. Returns
   /// the largest turn among the elements that carry force [rad] (what decides whether the
-  /// normals settled); `idle_turn`, if given, gets the largest turn among the others.
-  double update_normals(std::vector<ContactElement>& contacts, const VecX& q, double* idle_turn = nullptr) const;
+  /// normals settled); `idle_turn`, if given, gets the largest turn among the others; `slide`
+  /// the largest distance across its old normal between the particles of an element that
+  /// carries force, relative to the sum of its fibers' radii (detected, they face each other).
+  double update_normals(std::vector<ContactElement>& contacts, const VecX& q, double* idle_turn = nullptr,
+                        double* slide = nullptr) const;
   /// Weaving (METHOD §6): every element whose fibers `rule(fiber_a, fiber_b)` maps to +1 or -1
   /// gets the normal rule * `direction` (from A towards B), its border particles re-chosen to
   /// face that way, and is marked prescribed (update_normals leaves it); `offset` is added to

@@ -71,6 +71,10 @@ struct ContactLoopHost {
 /// The contact loops of one increment.
 class ContactLoop {
  public:
+  /// How far a loaded pair's particles may lie apart across its normal (relative to the sum of
+  /// their radii; detected, they face each other) before a settling increment ends at that
+  /// normal update: its elements no longer describe the contacts.
+  static constexpr double kStaleSlide = 0.1;
   /// For `model` with its contact bookkeeping `manager` and assembled problem `problem` (all kept
   /// by reference).
   ContactLoop(const Model& model, ContactManager& manager, Problem& problem)

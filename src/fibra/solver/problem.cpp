@@ -67,6 +67,7 @@ FixedPointChange Problem::update_fixed_point(const VecX& q) {
     all.turn = std::max(all.turn, c.turn);
     all.idle_turn = std::max(all.idle_turn, c.idle_turn);
     all.relative = std::max(all.relative, c.relative);
+    all.slide = std::max(all.slide, c.slide);
   }
   return all;
 }

@@ -318,6 +318,20 @@ double StaticSolver::normal_update_residual() {
       const double f = m_force_scale[d] * m_update_gradient[d];
       res += f * f;
     }
+  if (debug_newton()) {
+    Index worst = 0;
+    double worst_f = -1.0;
+    for (Index g = 0; g < m_model.num_nodes(); ++g) {
+      double f2 = 0.0;
+      for (Index d = g * kNodeDofs; d < g * kNodeDofs + 3; ++d)
+        if (!fixed[d]) f2 += std::pow(m_force_scale[d] * m_update_gradient[d], 2);
+      if (f2 > worst_f) worst_f = f2, worst = g;
+    }
+    for (const Fiber& f : m_model.fibers)
+      if (worst >= f.first_node && worst < f.first_node + f.num_nodes)
+        fmt::print(stderr, " residual with the new normals: largest force on a node {:.3e} N, fiber \"{}\" node {}\n",
+                   std::sqrt(worst_f), f.name, worst - f.first_node);
+  }
   return std::sqrt(res) / std::max(settling_reference(), 1e-300);
 }
 

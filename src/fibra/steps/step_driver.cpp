@@ -156,10 +156,12 @@ int RelaxDriver::converged(SolverProgress& run, StepHost& host, const SolvedIncr
   const bool release = settle(run, lambda_end);
   // A settling increment (it measured the residual with its updated normals and cones) that
   // ended with them unsettled creeps on if that residual is not at least half the last such
-  // increment's.
+  // increment's, and if something still moves: the drag's force, the drag times how far the
+  // increment moved, is at least a tenth of the tolerance (adapt_drag).
   bool creeping = false;
   if (releases_creep() && inc.settling_moved >= 0.0) {
-    creeping = !run.normals_settled && inc.settling_moved > 0.5 * run.settling_residual;
+    creeping = !run.normals_settled && inc.settling_moved > 0.5 * run.settling_residual &&
+               run.relax_residual >= kCreepDragForce * tolerance();
     run.settling_residual = inc.settling_moved;
   }
   int released = 0;  // Newton iterations of the release (not counted by the drag's rule)
@@ -178,6 +180,15 @@ int RelaxDriver::converged(SolverProgress& run, StepHost& host, const SolvedIncr
 // fibers on one side of a weft tow, squeezed out sideways, crept by 2-15 um per increment at
 // 66 N/m, the residual with their updated normals 1e-3 to 8e-3 at every increment, and the
 // relax had not ended 20 increments later (docs/theory/fabric.md, "What still creeps").
+//
+// A state whose drag force is below a tenth of the tolerance does not creep: what the drag
+// holds has stopped, and the residual with the updated normals stalls because the normals of
+// fibers rolling on each other within the tows turn by 1e-2 rad from one update to the next
+// with their particles hardly sliding (under 1 um). A weaker drag there frees the spins and the
+// tows' inner rearrangements it held: on the 480-fiber twill, let fall from 8.4 to 0.5 N/m at a
+// drag force of 4e-7 to 1e-5, the spins moved again (their drag force from 3e-6 to 2.4e-3),
+// increments took 41-43 Newton iterations and the relax had not ended at 40 minutes; held at
+// 4.2 N/m from a drag force of 8.9e-6 on, ... (docs/theory/fabric.md, "What still creeps").
 //
 // The floor keeps the drag above twice one that failed. How fast it falls depends on how far
 // the fabric still moves. Far from equilibrium (drag force above 100 times the step's

@@ -164,6 +164,9 @@ class WeaveDriver : public StepDriver {
 /// once the drag's force is below the step's tolerance and the normals and cones settled.
 class RelaxDriver : public StepDriver {
  public:
+  /// The drag's force, relative to the step's tolerance, below which a settling increment whose
+  /// normals do not settle is not creeping: nothing the drag holds still moves (adapt_drag).
+  static constexpr double kCreepDragForce = 0.1;
   RelaxDriver(const StepSpec& st, const SolverSpec& opt, double k0);
   void begin(SolverProgress& run) const override;
   IncrementMode mode(const SolverProgress& run, double step_dl) const override;

@@ -102,7 +102,7 @@ void ContactTerm::begin_fixed_point(const VecX& q) {
 
 FixedPointChange ContactTerm::update_fixed_point(const VecX& q) {
   FixedPointChange change;
-  if (m_manager) change.turn = m_manager->update_normals(m_contacts, q, &change.idle_turn);
+  if (m_manager) change.turn = m_manager->update_normals(m_contacts, q, &change.idle_turn, &change.slide);
   if (m_friction.mu > 0.0) change.relative = freeze_cones(q);
   return change;
 }
