@@ -80,9 +80,9 @@ bool ContactLoop::solve(const ContactLoopRules& rules, const ContactLoopHost& ho
       const FixedPointChange change = m_problem.update_fixed_point(q);
       if (debug_newton())
         fmt::print(stderr,
-                   " normals turned {:.3e} rad ({:.3e} where no force), friction cones changed {:.3e}, {} elements\n",
-                   change.turn, change.idle_turn, change.relative, m_problem.contacts().size());
-      if (debug_newton()) fmt::print(stderr, " largest slide with force {:.3e} of the radii\n", change.slide);
+                   " normals turned {:.3e} rad ({:.3e} where no force), friction cones changed {:.3e}, {} elements, "
+                   "pairs with force slid up to {:.3e} of their radii\n",
+                   change.turn, change.idle_turn, change.relative, m_problem.contacts().size(), change.slide);
       run.normals_settled = change.turn < spec.normal_tolerance && change.relative <= spec.normal_tolerance;
       // Relax and test increments that iterate the normals (drag force below the step's
       // tolerance): the state is an equilibrium to that tolerance once the residual with the

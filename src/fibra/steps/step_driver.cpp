@@ -185,10 +185,11 @@ int RelaxDriver::converged(SolverProgress& run, StepHost& host, const SolvedIncr
 // holds has stopped, and the residual with the updated normals stalls because the normals of
 // fibers rolling on each other within the tows turn by 1e-2 rad from one update to the next
 // with their particles hardly sliding (under 1 um). A weaker drag there frees the spins and the
-// tows' inner rearrangements it held: on the 480-fiber twill, let fall from 8.4 to 0.5 N/m at a
-// drag force of 4e-7 to 1e-5, the spins moved again (their drag force from 3e-6 to 2.4e-3),
-// increments took 41-43 Newton iterations and the relax had not ended at 40 minutes; held at
-// 4.2 N/m from a drag force of 8.9e-6 on, ... (docs/theory/fabric.md, "What still creeps").
+// tows' inner rearrangements it held: on the 480-fiber twill, let fall from 4.2 to 0.49 N/m at
+// drag forces of 9e-6 to 4e-7, the spins moved again (their drag force from 3e-6 to 2.4e-3),
+// increments took 39-43 Newton iterations and the relax had not ended at 40 minutes; held at
+// 4.2 N/m from the same state, it ended 9 increments later (docs/theory/fabric.md, "What still
+// creeps").
 //
 // The floor keeps the drag above twice one that failed. How fast it falls depends on how far
 // the fabric still moves. Far from equilibrium (drag force above 100 times the step's
