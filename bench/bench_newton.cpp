@@ -10,6 +10,7 @@
 //   BM_CholmodSolve               forward/back substitution for one right-hand side
 //   BM_CholmodPrecondition        the same with the factor rounded to floats (CG's preconditioner;
 //                                 two threads when OpenMP has them)
+//   BM_CholmodPreconditionHalf    the same with the factor's rows scaled and rounded to halves
 //   BM_SymmetricMultiply/threads:T  the tangent times a vector (CG's other product)
 //   BM_NewtonIteration/threads:2/blas_threads:B  assembly + factorization + solve (target < 1 s)
 //   BM_EigenFactorize/fibers:F    Eigen SimplicialLDLT numeric factorization (fallback)
@@ -47,7 +48,7 @@ Bundle& bundle(int fibers = kFibers) {
 
 /// A solver of the given kind, analysed once on the bundle's pattern (outside any timing). The
 /// factorization benchmarks keep CG's preconditioner in double (no single-precision copy timed
-/// with them); BM_CholmodPrecondition asks for the single one.
+/// with them); BM_CholmodPrecondition asks for the single one, BM_CholmodPreconditionHalf for halves.
 LinearSolver& analysed(const std::string& kind, int fibers = kFibers,
                        KrylovPrecision precision = KrylovPrecision::Double) {
   static std::map<std::tuple<std::string, int, KrylovPrecision>, std::unique_ptr<LinearSolver>> cache;
@@ -213,11 +214,12 @@ BENCHMARK(BM_CholmodFactorize)
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 
-/// Times one substitution with the bundle's factor: solve() (single = false) or precondition()
-/// with the factor rounded to floats (single = true, which also reports its distance to solve()).
-void time_substitution(benchmark::State& state, bool single) {
+/// Times one substitution with the bundle's factor: solve() (Double) or precondition() with the
+/// factor rounded to floats (Single) or halves (Half), which also report their distance to solve().
+void time_substitution(benchmark::State& state, KrylovPrecision precision) {
   Bundle& b = bundle();
-  LinearSolver& s = analysed("cholmod", kFibers, single ? KrylovPrecision::Single : KrylovPrecision::Double);
+  const bool single = precision != KrylovPrecision::Double;
+  LinearSolver& s = analysed("cholmod", kFibers, precision);
   if (s.factorize(b.hessian, 0.0) != FactorStatus::Ok) {
     state.SkipWithError("factorization failed");
     return;
@@ -256,11 +258,14 @@ void BM_SymmetricMultiply(benchmark::State& state) {
 }
 BENCHMARK(BM_SymmetricMultiply)->ArgName("threads")->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
 
-void BM_CholmodSolve(benchmark::State& state) { time_substitution(state, false); }
+void BM_CholmodSolve(benchmark::State& state) { time_substitution(state, KrylovPrecision::Double); }
 BENCHMARK(BM_CholmodSolve)->UseRealTime()->Unit(benchmark::kMillisecond);
 
-void BM_CholmodPrecondition(benchmark::State& state) { time_substitution(state, true); }
+void BM_CholmodPrecondition(benchmark::State& state) { time_substitution(state, KrylovPrecision::Single); }
 BENCHMARK(BM_CholmodPrecondition)->UseRealTime()->Unit(benchmark::kMillisecond);
+
+void BM_CholmodPreconditionHalf(benchmark::State& state) { time_substitution(state, KrylovPrecision::Half); }
+BENCHMARK(BM_CholmodPreconditionHalf)->UseRealTime()->Unit(benchmark::kMillisecond);
 
 void BM_NewtonIteration(benchmark::State& state) {
   Bundle& b = bundle();

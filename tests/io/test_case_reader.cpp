@@ -614,7 +614,7 @@ const std::vector<BadCase> kBadCases = {
     {"RelaxDragIsTheMethods", "max_cuts = 5", "max_cuts = 5\nrelax_drag = 0.25", "solver.relax_drag",
      "is not a setting: the solver sets it itself"},
     {"KrylovPrecisionUnknown", "max_cuts = 5", "max_cuts = 5\nkrylov_precision = \"singel\"",
-     "solver.krylov_precision", "expected \"auto\", \"single\" or \"double\", got \"singel\" (did you mean \"single\"?)"},
+     "solver.krylov_precision", "expected \"auto\", \"single\", \"half\" or \"double\", got \"singel\" (did you mean \"single\"?)"},
     {"TestToleranceMoved", "max_cuts = 5", "max_cuts = 5\ntest_tolerance = 1e-3", "solver.test_tolerance",
      "is now the `tolerance` of each relax, biaxial or shear [[step]]"},
     {"StepToleranceOfALoadStep", "max_increments = 200", "max_increments = 200\ntolerance = 1e-3", "step[0].tolerance",

@@ -184,7 +184,7 @@ TEST(CaseSchema, ChoicesAreThoseAllowed) {
     }
   }
   EXPECT_GE(keys, 7u);
-  EXPECT_EQ(schema_choices("solver", "krylov_precision"), (std::vector<std::string_view>{"auto", "single", "double"}));
+  EXPECT_EQ(schema_choices("solver", "krylov_precision"), (std::vector<std::string_view>{"auto", "single", "half", "double"}));
 }
 
 TEST(CaseSchema, VariantsSelectKeys) {

@@ -10,7 +10,7 @@
 #include "fibra/core/debug.hpp"
 #include "fibra/solver/blas_threads.hpp"
 #include "fibra/solver/linear_solver.hpp"
-#include "fibra/solver/single_factor.hpp"
+#include "fibra/solver/rounded_factor.hpp"
 
 namespace fibra {
 namespace {
@@ -75,8 +75,8 @@ class CholmodSolver final : public LinearSolver {
     if (m_common.status < CHOLMOD_OK) return FactorStatus::Failed;
     m_factored = true;
     m_single_ready = false;
-    if (m_precision == KrylovPrecision::Single ||
-        (m_precision == KrylovPrecision::Auto && m_common.lnz >= kSingleFactorNonzeros)) {
+    if (m_precision == KrylovPrecision::Single || m_precision == KrylovPrecision::Half ||
+        (m_precision == KrylovPrecision::Auto && m_common.lnz >= kRoundedFactorNonzeros)) {
       SupernodalView v;
       v.n = static_cast<Index>(m_factor->n);
       v.nsuper = static_cast<Index>(m_factor->nsuper);
@@ -86,7 +86,19 @@ class CholmodSolver final : public LinearSolver {
       v.s_rows = static_cast<const int*>(m_factor->s);
       v.values = static_cast<const double*>(m_factor->x);
       v.perm = static_cast<const int*>(m_factor->Perm);
-      m_single.assign(v);
+      if (storage() == FactorStorage::Half) {
+        // The diagonal: the last stored entry of each column of the upper triangle.
+        const Index n = m_pattern->rows();
+        const auto& col_ptr = m_pattern->col_ptr();
+        const auto& row_idx = m_pattern->row_idx();
+        m_diagonal.assign(n, shift);
+        for (Index c = 0; c < n; ++c) {
+          const Index last = col_ptr[c + 1] - 1;
+          if (last >= col_ptr[c] && row_idx[last] == c) m_diagonal[c] += values[last];
+        }
+        v.diagonal = m_diagonal.data();
+      }
+      m_single.assign(v, storage());
       m_single_ready = true;
       if (debug_newton()) print_single_comparison();
     }
@@ -138,6 +150,14 @@ class CholmodSolver final : public LinearSolver {
     return m_flops >= adaptive_blas_min_flops() ? omp_get_max_threads() : 0;
   }
 
+  /// How the rounded copy stores its values: halves when asked, or under Auto when the build
+  /// converts them with the processor's instructions (F16C); floats otherwise.
+  FactorStorage storage() const {
+    const bool half = m_precision == KrylovPrecision::Half ||
+                      (m_precision == KrylovPrecision::Auto && halves_in_hardware());
+    return half ? FactorStorage::Half : FactorStorage::Float;
+  }
+
   /// Times a double and a single-precision solve of one random right-hand side and prints them
   /// with their relative difference (FIBRA_DEBUG_NEWTON).
   void print_single_comparison() {
@@ -146,13 +166,19 @@ class CholmodSolver final : public LinearSolver {
     const auto t0 = std::chrono::steady_clock::now();
     solve(b, x_double);
     const auto t1 = std::chrono::steady_clock::now();
-    m_single.solve(b, x_single);
-    const auto t2 = std::chrono::steady_clock::now();
+    // The rounded solve's best of three (the first touches its work arrays).
+    double rounded = 1e300;
+    for (int k = 0; k < 3; ++k) {
+      const auto t2 = std::chrono::steady_clock::now();
+      m_single.solve(b, x_single);
+      rounded = std::min(rounded, std::chrono::duration<double>(std::chrono::steady_clock::now() - t2).count());
+    }
     fmt::print(stderr,
-               "  single-precision factor: {:.3e} values, {:.1f} % in the tree's top; solve {:.3f} s (double {:.3f} s), "
+               "  rounded factor: {:.3e} {} values, {:.1f} % in the tree's top; solve {:.3f} s (best of 3; double {:.3f} s), "
                "relative difference {:.2e}\n",
-               m_single.value_bytes() / sizeof(float), 100.0 * m_single.top_share(),
-               std::chrono::duration<double>(t2 - t1).count(), std::chrono::duration<double>(t1 - t0).count(),
+               m_single.values(), m_single.storage() == FactorStorage::Half ? "half" : "single",
+               100.0 * m_single.top_share(),
+               rounded, std::chrono::duration<double>(t1 - t0).count(),
                (x_double - x_single).norm() / x_double.norm());
   }
 
@@ -180,7 +206,8 @@ class CholmodSolver final : public LinearSolver {
   bool m_factored = false;  // m_factor holds a successful numeric factorization
   const BlockPattern* m_pattern = nullptr;
   std::vector<double> m_dummy;
-  SingleFactor m_single;       // the factor rounded to floats, for preconditioning
+  std::vector<double> m_diagonal;  // the factored matrix's diagonal (halves' row scales)
+  RoundedFactor m_single;      // the factor rounded to floats or halves, for preconditioning
   bool m_single_ready = false;  // m_single holds the last successful factorization
   KrylovPrecision m_precision = KrylovPrecision::Auto;
 };

@@ -66,8 +66,9 @@ class EigenSolver final : public LinearSolver {
 KrylovPrecision krylov_precision_from(const std::string& name) {
   if (name == "auto") return KrylovPrecision::Auto;
   if (name == "single") return KrylovPrecision::Single;
+  if (name == "half") return KrylovPrecision::Half;
   if (name == "double") return KrylovPrecision::Double;
-  throw std::invalid_argument("unknown krylov precision \"" + name + "\" (expected \"auto\", \"single\" or \"double\")");
+  throw std::invalid_argument("unknown krylov precision \"" + name + "\" (expected \"auto\", \"single\", \"half\" or \"double\")");
 }
 
 std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name, const std::string& ordering) {

@@ -15,16 +15,19 @@ enum class FactorStatus { Ok, NotPositiveDefinite, Failed };
 
 /// Precision of the factor precondition() uses.
 enum class KrylovPrecision {
-  Auto,    ///< single for factors of at least kSingleFactorNonzeros nonzeros, double below
-  Single,  ///< the factor rounded to floats (SingleFactor)
+  Auto,    ///< for factors of at least kRoundedFactorNonzeros nonzeros halves (floats in builds
+           ///< without F16C), double below
+  Single,  ///< the factor rounded to floats (RoundedFactor)
+  Half,    ///< the factor's rows scaled to unit length and rounded to halves (RoundedFactor)
   Double,  ///< the factor itself
 };
 
-/// Factors of at least this many nonzeros precondition in single precision under Auto: there
-/// the substitutions stream hundreds of MB per CG iteration (docs/performance.md, "The single-precision preconditioner").
-constexpr double kSingleFactorNonzeros = 1e7;
+/// Factors of at least this many nonzeros precondition with a rounded copy under Auto: there
+/// the substitutions stream hundreds of MB per CG iteration (docs/performance.md, "The
+/// rounded preconditioner").
+constexpr double kRoundedFactorNonzeros = 1e7;
 
-/// Parses "auto", "single" or "double"; throws std::invalid_argument otherwise.
+/// Parses "auto", "single", "half" or "double"; throws std::invalid_argument otherwise.
 KrylovPrecision krylov_precision_from(const std::string& name);
 
 /// Symmetric sparse direct solver working on a BlockPattern's upper CSC storage.
@@ -43,7 +46,7 @@ class LinearSolver {
   virtual void solve(const VecX& b, VecX& x) = 0;
   /// x ~ A^-1 b with the last successful factorization, as a preconditioner: by default the
   /// exact solve; CHOLMOD with single-precision preconditioning uses the factor rounded to
-  /// floats (SingleFactor).
+  /// floats or halves (RoundedFactor).
   virtual void precondition(const VecX& b, VecX& x) { solve(b, x); }
   /// Chooses the precision precondition() uses from the next factorization on (back ends
   /// without a single-precision copy ignore it).

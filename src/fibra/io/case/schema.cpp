@@ -618,7 +618,7 @@ constexpr KeySpec kStart[] = {
 };
 
 constexpr std::string_view kLinearSolvers[] = {"cholmod", "eigen"};
-constexpr std::string_view kKrylovPrecisions[] = {"auto", "single", "double"};
+constexpr std::string_view kKrylovPrecisions[] = {"auto", "single", "half", "double"};
 constexpr KeySpec kSolver[] = {
     {.name = "residual_tolerance",
      .type = "number",
@@ -659,8 +659,8 @@ constexpr KeySpec kSolver[] = {
     {.name = "krylov_precision",
      .type = "string",
      .default_value = "`\"auto\"`",
-     .allowed = "`\"auto\"`, `\"single\"`, `\"double\"`",
-     .meaning = "The factor the conjugate-gradient solves precondition with (`docs/theory/solver.md`, \"Reusing the factorization\"): `\"single\"` rounds a copy of it to floats after each factorization (half the memory traffic per CG iteration, substitutions on two threads; same iterations within a few), `\"double\"` uses the factor itself, `\"auto\"` takes single for factors of at least 1e7 nonzeros (CHOLMOD only).",
+     .allowed = "`\"auto\"`, `\"single\"`, `\"half\"`, `\"double\"`",
+     .meaning = "The factor the conjugate-gradient solves precondition with (`docs/theory/solver.md`, \"Reusing the factorization\"): `\"single\"` rounds a copy of it to floats after each factorization (half the memory traffic per CG iteration, substitutions on two threads; same iterations within a few), `\"half\"` scales each of its rows to unit length and rounds it to halves (IEEE binary16: a quarter of the traffic), `\"double\"` uses the factor itself, `\"auto\"` takes half (single where the build has no F16C instructions) for factors of at least 1e7 nonzeros (CHOLMOD only).",
      .choices = kKrylovPrecisions},
     {.name = "binding_tolerance",
      .type = "number",

@@ -1,18 +1,20 @@
 // The single-precision copy of CHOLMOD's supernodal factor that preconditions conjugate
-// gradients (solver/single_factor.hpp): its substitutions against the double factor's, the
+// gradients (solver/rounded_factor.hpp): its substitutions against the double factor's, the
 // same result on one thread and two, the split of the elimination tree, and the Newton solver
 // reaching the same states with either precision.
 #include <cholmod.h>
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <bit>
+#include <cmath>
 #include <fstream>
 #include <random>
 #include <sstream>
 
 #include "fibra/assembly/block_pattern.hpp"
 #include "fibra/solver/linear_solver.hpp"
-#include "fibra/solver/single_factor.hpp"
+#include "fibra/solver/rounded_factor.hpp"
 #include "verification/verification_support.hpp"
 
 namespace fibra::test {
@@ -83,7 +85,7 @@ VecX precondition_with(const Grid& grid, KrylovPrecision precision, const VecX& 
   return x;
 }
 
-TEST(SingleFactor, SubstitutionsMatchTheDoubleFactorToSinglePrecision) {
+TEST(RoundedFactor, SubstitutionsMatchTheDoubleFactorToSinglePrecision) {
   const Grid grid(40);  // 4 800 dofs
   const VecX b = random_vector(grid.n(), 3);
   VecX exact;
@@ -99,7 +101,66 @@ TEST(SingleFactor, SubstitutionsMatchTheDoubleFactorToSinglePrecision) {
   std::printf("single vs double substitutions: relative difference %.2e\n", difference);
 }
 
-TEST(SingleFactor, DoublePrecisionPreconditionsWithTheFactorItself) {
+// Halves: 11 significant bits after each row is scaled to unit length, whatever the scales of
+// the matrix's rows (here spread over 6 decades).
+TEST(RoundedFactor, HalfSubstitutionsMatchTheDoubleFactorToHalfPrecision) {
+  const Grid grid(40);
+  const VecX b = random_vector(grid.n(), 3);
+  VecX exact, single_x;
+  bool rounded = false;
+  const VecX x = precondition_with(grid, KrylovPrecision::Half, b, exact, rounded);
+  ASSERT_TRUE(rounded);
+  single_x = precondition_with(grid, KrylovPrecision::Single, b, exact, rounded);
+  const double difference = (x - exact).norm() / exact.norm();
+  const double single_difference = (single_x - exact).norm() / exact.norm();
+  std::printf("half vs double substitutions: relative difference %.2e (single %.2e)\n", difference, single_difference);
+  // A half's unit roundoff is 2^-11 = 4.9e-4, a float's 2^-24 = 6.0e-8: the difference grows
+  // with the roundoff, by the same growth of the triangular solves.
+  EXPECT_GT(difference, 100.0 * single_difference);
+  EXPECT_LT(difference, 8192.0 * 1e2 * single_difference);
+  EXPECT_LT(difference, 0.1);
+}
+
+// The software conversions against values known by construction, and against the processor's
+// (F16C) on every half and on a million floats, ties and subnormals among them.
+TEST(RoundedFactor, HalvesRoundToNearestEvenLikeTheProcessor) {
+  const std::pair<float, std::uint16_t> known[] = {
+      {1.0f, 0x3c00}, {-2.0f, 0xc000}, {65504.0f, 0x7bff}, {65519.0f, 0x7bff}, {65520.0f, 0x7c00},
+      {0x1p-14f, 0x0400}, {0x1p-24f, 0x0001}, {0x1p-25f, 0x0000}, {0x1.8p-25f, 0x0001}, {0x1.8p-24f, 0x0002},
+      {1.0f + 0x1p-11f, 0x3c00}, {1.0f + 0x3p-11f, 0x3c02}, {1.0f + 0x1p-10f, 0x3c01}, {0.0f, 0x0000},
+      {-0.0f, 0x8000}, {1e-30f, 0x0000}, {1e30f, 0x7c00}};
+  for (const auto& [value, bits] : known) {
+    EXPECT_EQ(float_to_half_in_software(value), bits) << value;
+    EXPECT_EQ(float_to_half(value), bits) << value;
+  }
+  for (std::uint32_t h = 0; h < 0x10000u; ++h) {
+    const auto bits = static_cast<std::uint16_t>(h);
+    const bool nan = (h & 0x7c00u) == 0x7c00u && (h & 0x3ffu) != 0;
+    const float value = half_to_float_in_software(bits);
+    if (nan) {
+      EXPECT_TRUE(std::isnan(value));
+      continue;
+    }
+    ASSERT_EQ(std::bit_cast<std::uint32_t>(value), std::bit_cast<std::uint32_t>(half_to_float(bits))) << h;
+    ASSERT_EQ(float_to_half_in_software(value), bits) << h;
+    // Halfway to the next half up (in magnitude): a tie, to the even one of the two.
+    if ((h & 0x7fffu) < 0x7bffu) {
+      const float next = half_to_float_in_software(static_cast<std::uint16_t>(h + 1));
+      const float middle = static_cast<float>((static_cast<double>(value) + next) / 2.0);
+      ASSERT_EQ(float_to_half_in_software(middle), (h & 1u) ? h + 1 : h) << h;
+    }
+  }
+  if (!halves_in_hardware()) GTEST_SKIP() << "no F16C in this build: the software conversions are the only ones";
+  std::mt19937 gen(11);
+  std::uniform_int_distribution<std::uint32_t> any;
+  for (int k = 0; k < 1000000; ++k) {
+    const float value = std::bit_cast<float>(any(gen) >> (k % 3 == 0 ? 0 : 3));  // a third over all floats
+    if (std::isnan(value)) continue;
+    ASSERT_EQ(float_to_half_in_software(value), float_to_half(value)) << value;
+  }
+}
+
+TEST(RoundedFactor, DoublePrecisionPreconditionsWithTheFactorItself) {
   const Grid grid(20);
   const VecX b = random_vector(grid.n(), 4);
   VecX exact;
@@ -114,7 +175,7 @@ TEST(SingleFactor, DoublePrecisionPreconditionsWithTheFactorItself) {
   EXPECT_EQ((y - exact).norm(), 0.0);
 }
 
-TEST(SingleFactor, SameResultOnOneThreadAndTwo) {
+TEST(RoundedFactor, SameResultOnOneThreadAndTwo) {
   const Grid grid(40);
   const VecX b = random_vector(grid.n(), 5);
   const int previous = omp_get_max_threads();
@@ -126,11 +187,17 @@ TEST(SingleFactor, SameResultOnOneThreadAndTwo) {
   two = precondition_with(grid, KrylovPrecision::Single, b, exact, single);
   omp_set_num_threads(previous);
   EXPECT_EQ((one - two).norm(), 0.0);
+  omp_set_num_threads(1);
+  one = precondition_with(grid, KrylovPrecision::Half, b, exact, single);
+  omp_set_num_threads(2);
+  two = precondition_with(grid, KrylovPrecision::Half, b, exact, single);
+  omp_set_num_threads(previous);
+  EXPECT_EQ((one - two).norm(), 0.0);
 }
 
 // The tree's cut, with CHOLMOD's factor read directly: a top and two parts, and the
 // substitutions exact to rounding when the values are exactly representable in floats.
-TEST(SingleFactor, TreeCutIntoATopAndTwoBalancedParts) {
+TEST(RoundedFactor, TreeCutIntoATopAndTwoBalancedParts) {
   const Grid grid(40);
   cholmod_common common;
   cholmod_start(&common);
@@ -167,7 +234,7 @@ TEST(SingleFactor, TreeCutIntoATopAndTwoBalancedParts) {
   v.s_rows = static_cast<const int*>(f->s);
   v.values = lx;
   v.perm = static_cast<const int*>(f->Perm);
-  SingleFactor single;
+  RoundedFactor single;
   single.assign(v);
   EXPECT_GT(single.top_share(), 0.0);   // a top, done on one thread
   EXPECT_LE(single.top_share(), 0.4);   // the rule's bound
@@ -205,22 +272,28 @@ TEST(SingleFactor, TreeCutIntoATopAndTwoBalancedParts) {
   cholmod_finish(&common);
 }
 
-TEST(SingleFactor, NewtonReachesTheSameStatesInEitherPrecision) {
+TEST(RoundedFactor, NewtonReachesTheSameStatesInEitherPrecision) {
   std::ifstream in(std::string(FIBRA_SOURCE_DIR) + "/examples/crossed_fibers/crossed_fibers.toml");
   ASSERT_TRUE(in.good());
   std::stringstream text;
   text << in.rdbuf();
   const Solved twice = solve_toml(text.str() + "\n[solver]\nkrylov_precision = \"double\"\n");
   const Solved once = solve_toml(text.str() + "\n[solver]\nkrylov_precision = \"single\"\n");
+  const Solved half = solve_toml(text.str() + "\n[solver]\nkrylov_precision = \"half\"\n");
   ASSERT_TRUE(twice.converged()) << twice.result.message;
   ASSERT_TRUE(once.converged()) << once.result.message;
+  ASSERT_TRUE(half.converged()) << half.result.message;
   ASSERT_GT(once.stats.reused_factorizations, 0);
   const double scale = (twice.q - twice.model.reference).norm();
   EXPECT_LT((once.q - twice.q).norm(), 1e-6 * scale);
+  EXPECT_LT((half.q - twice.q).norm(), 1e-6 * scale);
   // The rounded factor preconditions as well as the exact one: CG's count within 10 %.
   EXPECT_LE(once.stats.krylov_iterations, 1.1 * twice.stats.krylov_iterations + 2);
-  std::printf("CG iterations: double %d, single %d; Newton iterations %d, %d\n", twice.stats.krylov_iterations,
-              once.stats.krylov_iterations, twice.stats.iterations, once.stats.iterations);
+  // Halves: 11 bits, still a preconditioner as good as the exact factor within a few iterations.
+  EXPECT_LE(half.stats.krylov_iterations, 1.25 * twice.stats.krylov_iterations + 4);
+  std::printf("CG iterations: double %d, single %d, half %d; Newton iterations %d, %d, %d\n",
+              twice.stats.krylov_iterations, once.stats.krylov_iterations, half.stats.krylov_iterations,
+              twice.stats.iterations, once.stats.iterations, half.stats.iterations);
 }
 
 }  // namespace
