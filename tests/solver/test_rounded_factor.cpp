@@ -1,7 +1,7 @@
-// The single-precision copy of CHOLMOD's supernodal factor that preconditions conjugate
-// gradients (solver/rounded_factor.hpp): its substitutions against the double factor's, the
-// same result on one thread and two, the split of the elimination tree, and the Newton solver
-// reaching the same states with either precision.
+// The rounded copy of CHOLMOD's supernodal factor that preconditions conjugate gradients
+// (solver/rounded_factor.hpp), in floats and in halves: its substitutions against the double
+// factor's, the half conversions, the same result on one thread and two, the split of the
+// elimination tree, and the Newton solver reaching the same states in every precision.
 #include <cholmod.h>
 #include <gtest/gtest.h>
 #include <omp.h>
@@ -78,7 +78,7 @@ VecX precondition_with(const Grid& grid, KrylovPrecision precision, const VecX& 
   solver->set_krylov_precision(precision);
   solver->analyze(*grid.pattern);
   EXPECT_EQ(solver->factorize(grid.values, 0.0), FactorStatus::Ok);
-  single = solver->single_precision_preconditioner();
+  single = solver->rounded_preconditioner();
   VecX x;
   solver->precondition(b, x);
   solver->solve(b, exact);
@@ -97,7 +97,6 @@ TEST(RoundedFactor, SubstitutionsMatchTheDoubleFactorToSinglePrecision) {
   // of the triangular solves on this matrix (condition number up to ~1e9 by construction).
   EXPECT_GT(difference, 1e-12);
   EXPECT_LT(difference, 1e-3);
-  // And as a preconditioner: M^-1 A b close to b.
   std::printf("single vs double substitutions: relative difference %.2e\n", difference);
 }
 
@@ -117,7 +116,7 @@ TEST(RoundedFactor, HalfSubstitutionsMatchTheDoubleFactorToHalfPrecision) {
   // A half's unit roundoff is 2^-11 = 4.9e-4, a float's 2^-24 = 6.0e-8: the difference grows
   // with the roundoff, by the same growth of the triangular solves.
   EXPECT_GT(difference, 100.0 * single_difference);
-  EXPECT_LT(difference, 8192.0 * 1e2 * single_difference);
+  EXPECT_LT(difference, 8.0 * 8192.0 * single_difference);
   EXPECT_LT(difference, 0.1);
 }
 
@@ -148,16 +147,122 @@ TEST(RoundedFactor, HalvesRoundToNearestEvenLikeTheProcessor) {
       const float next = half_to_float_in_software(static_cast<std::uint16_t>(h + 1));
       const float middle = static_cast<float>((static_cast<double>(value) + next) / 2.0);
       ASSERT_EQ(float_to_half_in_software(middle), (h & 1u) ? h + 1 : h) << h;
+      ASSERT_EQ(float_to_half(middle), (h & 1u) ? h + 1 : h) << h;
     }
   }
   if (!halves_in_hardware()) GTEST_SKIP() << "no F16C in this build: the software conversions are the only ones";
+  // Floats from 2^-26 to 2^16 (subnormal halves to beyond the largest), either sign; a quarter
+  // of them ties between two halves (the 13 bits a half drops set to exactly one half unit),
+  // and a tenth anywhere among all floats.
   std::mt19937 gen(11);
-  std::uniform_int_distribution<std::uint32_t> any;
+  std::uniform_int_distribution<std::uint32_t> magnitude(0x32800000u, 0x47800000u), any;
   for (int k = 0; k < 1000000; ++k) {
-    const float value = std::bit_cast<float>(any(gen) >> (k % 3 == 0 ? 0 : 3));  // a third over all floats
+    std::uint32_t bits = k % 10 == 0 ? any(gen) : magnitude(gen) | (k % 2 ? 0x80000000u : 0u);
+    if (k % 4 == 1) bits = (bits & ~0x1fffu) | 0x1000u;
+    const float value = std::bit_cast<float>(bits);
     if (std::isnan(value)) continue;
     ASSERT_EQ(float_to_half_in_software(value), float_to_half(value)) << value;
   }
+}
+
+// Halves on a matrix whose unknowns' units span 20 decades (D A D, D = diag(10^u), u in
+// [-10, 10]): unscaled, its factor's values would overflow a half or vanish. The halves' solve
+// is exactly the solve with the factor whose rows are scaled, rounded to halves and scaled
+// back (the pivots unrounded), which CHOLMOD does here with the factor so rounded in place;
+// and it stays within the halves' rounding of the double solve, with the matrix's diagonal or
+// with the rows' lengths summed from the factor.
+TEST(RoundedFactor, HalvesAreTheRowScaledFactorRounded) {
+  Grid grid(30);
+  const Index n = grid.n();
+  std::mt19937 gen(13);
+  std::uniform_real_distribution<double> u(-10.0, 10.0);
+  std::vector<double> unit(n);
+  for (double& d : unit) d = std::pow(10.0, u(gen));
+  const auto& col_ptr = grid.pattern->col_ptr();
+  const auto& row_idx = grid.pattern->row_idx();
+  std::vector<double> diagonal(n, 0.0);
+  for (Index c = 0; c < n; ++c)
+    for (Index k = col_ptr[c]; k < col_ptr[c + 1]; ++k) {
+      grid.values[k] *= unit[row_idx[k]] * unit[c];
+      if (row_idx[k] == c) diagonal[c] = grid.values[k];
+    }
+  cholmod_common common;
+  cholmod_start(&common);
+  common.supernodal = CHOLMOD_SUPERNODAL;
+  common.nmethods = 1;
+  common.method[0].ordering = CHOLMOD_METIS;
+  common.postorder = 1;
+  cholmod_sparse a{};
+  a.nrow = a.ncol = n;
+  a.nzmax = grid.pattern->nonzeros();
+  a.p = const_cast<int*>(col_ptr.data());
+  a.i = const_cast<int*>(row_idx.data());
+  a.x = grid.values.data();
+  a.stype = 1;
+  a.itype = CHOLMOD_INT;
+  a.xtype = CHOLMOD_REAL;
+  a.dtype = CHOLMOD_DOUBLE;
+  a.sorted = 1;
+  a.packed = 1;
+  cholmod_factor* f = cholmod_analyze(&a, &common);
+  ASSERT_NE(f, nullptr);
+  ASSERT_TRUE(cholmod_factorize(&a, f, &common));
+  ASSERT_TRUE(f->is_super);
+  SupernodalView v;
+  v.n = n;
+  v.nsuper = static_cast<Index>(f->nsuper);
+  v.super = static_cast<const int*>(f->super);
+  v.pi = static_cast<const int*>(f->pi);
+  v.px = static_cast<const int*>(f->px);
+  v.s_rows = static_cast<const int*>(f->s);
+  v.values = static_cast<const double*>(f->x);
+  v.perm = static_cast<const int*>(f->Perm);
+  v.diagonal = diagonal.data();
+  auto solve_with = [&](cholmod_factor* factor, const VecX& b) {
+    cholmod_dense rhs{};
+    rhs.nrow = rhs.nzmax = rhs.d = n;
+    rhs.ncol = 1;
+    rhs.x = const_cast<double*>(b.data());
+    rhs.xtype = CHOLMOD_REAL;
+    rhs.dtype = CHOLMOD_DOUBLE;
+    cholmod_dense* sol = cholmod_solve(CHOLMOD_A, factor, &rhs, &common);
+    EXPECT_NE(sol, nullptr);
+    const VecX x = Eigen::Map<const VecX>(static_cast<double*>(sol->x), n);
+    cholmod_free_dense(&sol, &common);
+    return x;
+  };
+  VecX b = random_vector(n, 8);
+  for (Index k = 0; k < n; ++k) b[k] *= unit[k];
+  const VecX exact = solve_with(f, b);
+  RoundedFactor half, summed;
+  half.assign(v, FactorStorage::Half);
+  v.diagonal = nullptr;
+  summed.assign(v, FactorStorage::Half);
+  VecX x, x_summed;
+  half.solve(b, x);
+  summed.solve(b, x_summed);
+  const double difference = (x - exact).norm() / exact.norm();
+  std::printf("halves, units over 20 decades: relative difference %.2e to the double solve, %.2e between the scales\n",
+              difference, (x_summed - x).norm() / x.norm());
+  EXPECT_GT(difference, 1e-7);
+  EXPECT_LT(difference, 1e-2);
+  EXPECT_LT((x_summed - x).norm(), 1e-6 * x.norm());
+  // The factor rounded in place as the halves are: row r (of P A P^T) scaled by 1 / sqrt(A_rr).
+  double* lx = static_cast<double*>(f->x);
+  for (Index s = 0; s < v.nsuper; ++s) {
+    const Index nscol = v.super[s + 1] - v.super[s], nsrow = v.pi[s + 1] - v.pi[s];
+    const int* rows = v.s_rows + v.pi[s];
+    for (Index j = 0; j < nscol; ++j)
+      for (Index i = j + 1; i < nsrow; ++i) {
+        const double scale = 1.0 / std::sqrt(diagonal[v.perm[rows[i]]]);
+        double& value = lx[v.px[s] + j * nsrow + i];
+        value = static_cast<double>(half_to_float(float_to_half(static_cast<float>(value * scale)))) / scale;
+      }
+  }
+  const VecX reference = solve_with(f, b);
+  EXPECT_LT((x - reference).norm(), 1e-9 * reference.norm());
+  cholmod_free_factor(&f, &common);
+  cholmod_finish(&common);
 }
 
 TEST(RoundedFactor, DoublePrecisionPreconditionsWithTheFactorItself) {

@@ -57,9 +57,10 @@ BodySystem::BodySystem(const Case& c, const Model& model) : m_model(model) {
       Member m;
       m.group = node;
       m.dof = kNodeDofs * node;
-      for (const Fiber& f : model.fibers)
-        if (node >= f.first_node && node < f.first_node + f.num_nodes)
-          m.r2 = model.sections[f.section].a * model.sections[f.section].b;
+      if (const int f = model.fiber_of_node(node); f >= 0) {
+        const Section& section = model.sections[model.fibers[f].section];
+        m.r2 = section.a * section.b;
+      }
       m.anchor = model.reference.segment<9>(m.dof);
       bd.members.push_back(m);
     }

@@ -252,7 +252,7 @@ struct SolverSpec {
   int max_iterations = 25;               ///< Newton iterations per increment
   int max_cuts = 12;                     ///< successive halvings of an increment
   std::string linear_solver = "cholmod";  ///< "cholmod" or "eigen"
-  std::string krylov_precision = "auto";  ///< CG's preconditioning factor: "single" (rounded to floats), "double", "auto" (single for large factors)
+  std::string krylov_precision = "auto";  ///< CG's preconditioning factor: "single" (rounded to floats), "half" (rows scaled, rounded to halves), "double", "auto" (single for large factors)
   double binding_tolerance = 1e-8;        ///< largest binding violation, relative to the model size
   int max_binding_updates = 30;           ///< multiplier updates per increment (augmented Lagrangian)
   SolverMethod method;                    ///< not read from case files

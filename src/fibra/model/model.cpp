@@ -85,6 +85,12 @@ int Model::fiber_index(const std::string& name) const {
   return -1;
 }
 
+int Model::fiber_of_node(Index node) const {
+  for (size_t i = 0; i < fibers.size(); ++i)
+    if (node >= fibers[i].first_node && node < fibers[i].first_node + fibers[i].num_nodes) return static_cast<int>(i);
+  return -1;
+}
+
 Index Model::node_index(const NodeRef& ref, const std::string& file, const std::string& key) const {
   const int f = fiber_index(ref.fiber);
   if (f < 0) throw InputError(file, key + ".fiber", fmt::format("no fiber named \"{}\"", ref.fiber));

@@ -55,6 +55,8 @@ struct Model {
   int fiber_index(const std::string& name) const;
   /// Index of a body by name, or -1.
   int body_index(const std::string& name) const;
+  /// Index of the fiber that holds global node `node`, or -1 (not a fiber's node).
+  int fiber_of_node(Index node) const;
   /// Global node index of a node reference; throws InputError (file, key) when invalid.
   Index node_index(const NodeRef& ref, const std::string& file, const std::string& key) const;
 };

@@ -16,7 +16,7 @@ namespace {
 
 /// Bytes per stored matrix entry: the value (8) and row index (4) of the assembled matrix, and
 /// at least one entry of the factor (fill-in only adds to the matrix's pattern), in double (8)
-/// and in the preconditioner's single-precision copy (4).
+/// and in the preconditioner's rounded copy (4 in floats; 2 in halves, counted as 4).
 constexpr double kBytesPerEntry = 8 + 4 + 8 + 4;
 /// Vectors of the dofs' size the model and the solver keep.
 constexpr double kVectors = 10;

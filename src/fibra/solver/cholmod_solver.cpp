@@ -74,7 +74,7 @@ class CholmodSolver final : public LinearSolver {
     if (m_common.status == CHOLMOD_NOT_POSDEF) return FactorStatus::NotPositiveDefinite;
     if (m_common.status < CHOLMOD_OK) return FactorStatus::Failed;
     m_factored = true;
-    m_single_ready = false;
+    m_rounded_ready = false;
     if (m_precision == KrylovPrecision::Single || m_precision == KrylovPrecision::Half ||
         (m_precision == KrylovPrecision::Auto && m_common.lnz >= kRoundedFactorNonzeros)) {
       SupernodalView v;
@@ -98,9 +98,9 @@ class CholmodSolver final : public LinearSolver {
         }
         v.diagonal = m_diagonal.data();
       }
-      m_single.assign(v, storage());
-      m_single_ready = true;
-      if (debug_newton()) print_single_comparison();
+      m_rounded.assign(v, storage());
+      m_rounded_ready = true;
+      if (debug_newton()) print_rounded_comparison();
     }
     return FactorStatus::Ok;
   }
@@ -126,11 +126,11 @@ class CholmodSolver final : public LinearSolver {
   }
 
   void set_krylov_precision(KrylovPrecision p) override { m_precision = p; }
-  bool single_precision_preconditioner() const override { return m_single_ready; }
+  bool rounded_preconditioner() const override { return m_rounded_ready; }
 
   void precondition(const VecX& b, VecX& x) override {
-    if (!m_single_ready) return solve(b, x);
-    m_single.solve(b, x);
+    if (!m_rounded_ready) return solve(b, x);
+    m_rounded.solve(b, x);
   }
 
   std::string name() const override { return "cholmod"; }
@@ -150,19 +150,17 @@ class CholmodSolver final : public LinearSolver {
     return m_flops >= adaptive_blas_min_flops() ? omp_get_max_threads() : 0;
   }
 
-  /// How the rounded copy stores its values: halves when asked, or under Auto when the build
-  /// converts them with the processor's instructions (F16C); floats otherwise.
+  /// How the rounded copy stores its values: halves when asked, floats otherwise (Auto too:
+  /// docs/performance.md, "The rounded preconditioner").
   FactorStorage storage() const {
-    const bool half = m_precision == KrylovPrecision::Half ||
-                      (m_precision == KrylovPrecision::Auto && halves_in_hardware());
-    return half ? FactorStorage::Half : FactorStorage::Float;
+    return m_precision == KrylovPrecision::Half ? FactorStorage::Half : FactorStorage::Float;
   }
 
-  /// Times a double and a single-precision solve of one random right-hand side and prints them
+  /// Times a double and a rounded solve of one random right-hand side and prints them
   /// with their relative difference (FIBRA_DEBUG_NEWTON).
-  void print_single_comparison() {
+  void print_rounded_comparison() {
     const VecX b = VecX::Random(static_cast<Index>(m_factor->n));
-    VecX x_double, x_single;
+    VecX x_double, x_rounded;
     const auto t0 = std::chrono::steady_clock::now();
     solve(b, x_double);
     const auto t1 = std::chrono::steady_clock::now();
@@ -170,16 +168,16 @@ class CholmodSolver final : public LinearSolver {
     double rounded = 1e300;
     for (int k = 0; k < 3; ++k) {
       const auto t2 = std::chrono::steady_clock::now();
-      m_single.solve(b, x_single);
+      m_rounded.solve(b, x_rounded);
       rounded = std::min(rounded, std::chrono::duration<double>(std::chrono::steady_clock::now() - t2).count());
     }
     fmt::print(stderr,
                "  rounded factor: {:.3e} {} values, {:.1f} % in the tree's top; solve {:.3f} s (best of 3; double {:.3f} s), "
                "relative difference {:.2e}\n",
-               m_single.values(), m_single.storage() == FactorStorage::Half ? "half" : "single",
-               100.0 * m_single.top_share(),
+               m_rounded.values(), m_rounded.storage() == FactorStorage::Half ? "half" : "single",
+               100.0 * m_rounded.top_share(),
                rounded, std::chrono::duration<double>(t1 - t0).count(),
-               (x_double - x_single).norm() / x_double.norm());
+               (x_double - x_rounded).norm() / x_double.norm());
   }
 
   cholmod_sparse wrap(const std::vector<double>& values) {
@@ -207,8 +205,8 @@ class CholmodSolver final : public LinearSolver {
   const BlockPattern* m_pattern = nullptr;
   std::vector<double> m_dummy;
   std::vector<double> m_diagonal;  // the factored matrix's diagonal (halves' row scales)
-  RoundedFactor m_single;      // the factor rounded to floats or halves, for preconditioning
-  bool m_single_ready = false;  // m_single holds the last successful factorization
+  RoundedFactor m_rounded;      // the factor rounded to floats or halves, for preconditioning
+  bool m_rounded_ready = false;  // m_rounded holds the last successful factorization
   KrylovPrecision m_precision = KrylovPrecision::Auto;
 };
 

@@ -15,8 +15,7 @@ enum class FactorStatus { Ok, NotPositiveDefinite, Failed };
 
 /// Precision of the factor precondition() uses.
 enum class KrylovPrecision {
-  Auto,    ///< for factors of at least kRoundedFactorNonzeros nonzeros halves (floats in builds
-           ///< without F16C), double below
+  Auto,    ///< floats for factors of at least kRoundedFactorNonzeros nonzeros, double below
   Single,  ///< the factor rounded to floats (RoundedFactor)
   Half,    ///< the factor's rows scaled to unit length and rounded to halves (RoundedFactor)
   Double,  ///< the factor itself
@@ -45,14 +44,14 @@ class LinearSolver {
   /// Solves A x = b with the last successful factorization.
   virtual void solve(const VecX& b, VecX& x) = 0;
   /// x ~ A^-1 b with the last successful factorization, as a preconditioner: by default the
-  /// exact solve; CHOLMOD with single-precision preconditioning uses the factor rounded to
+  /// exact solve; CHOLMOD with a rounded preconditioner uses the factor rounded to
   /// floats or halves (RoundedFactor).
   virtual void precondition(const VecX& b, VecX& x) { solve(b, x); }
   /// Chooses the precision precondition() uses from the next factorization on (back ends
-  /// without a single-precision copy ignore it).
+  /// without a rounded copy ignore it).
   virtual void set_krylov_precision(KrylovPrecision) {}
-  /// True when the last factorization made a single-precision copy for precondition().
-  virtual bool single_precision_preconditioner() const { return false; }
+  /// True when the last factorization made a rounded copy (floats or halves) for precondition().
+  virtual bool rounded_preconditioner() const { return false; }
   /// Short name ("cholmod", "eigen").
   virtual std::string name() const = 0;
   /// Nonzeros in the factor after the last factorization (0 if unknown).

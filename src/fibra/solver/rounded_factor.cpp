@@ -237,6 +237,8 @@ void RoundedFactor::assign(const SupernodalView& f, FactorStorage storage) {
     for (Index j = 0; j < nscol; ++j) {
       const double* from = in + px[s] + static_cast<std::int64_t>(j) * nsrow;
       std::uint16_t* to = out + offset[s] + packed_column(j, nsrow) - j;
+      // Through a float (F16C rounds floats): once in a while a value lands a half's unit away
+      // from the half nearest the double, the same way on every run.
       for (Index i = j; i < nsrow; ++i) to[i] = float_to_half(static_cast<float>(from[i] * scale[rows[i]]));
       pivot[super[s] + j] = from[j] * scale[rows[j]];
     }
@@ -338,22 +340,11 @@ RoundedFactor::Node RoundedFactor::node(Index s) const {
   return d;
 }
 
-const float* RoundedFactor::columns(const Node& d, Index j0, Index j1, int thread, bool onwards) const {
+const float* RoundedFactor::columns(const Node& d, Index j0, Index j1, int thread) const {
   const std::int64_t first = d.offset + packed_column(j0, d.nsrow);
   if (m_storage == FactorStorage::Float) return m_values.data() + first;
   float* out = m_block[thread].data();
-  const std::int64_t count = packed_column(j1, d.nsrow) - packed_column(j0, d.nsrow);
-  const std::uint16_t* in = m_halves.data() + first;
-  halves_to_floats(in, out, count);
-#if defined(__F16C__)
-  // The next block's values (as many, in the direction the substitution goes) on their way
-  // from memory while this one is used.
-  const std::uint16_t* begin = m_halves.data();
-  const std::uint16_t* end = begin + m_halves.size();
-  const std::uint16_t* from = onwards ? in + count : std::max(begin, in - count);
-  const std::uint16_t* to = onwards ? std::min(end, in + 2 * count) : in;
-  for (const std::uint16_t* a = from; a < to; a += 32) _mm_prefetch(reinterpret_cast<const char*>(a), _MM_HINT_T0);
-#endif
+  halves_to_floats(m_halves.data() + first, out, packed_column(j1, d.nsrow) - packed_column(j0, d.nsrow));
   return out;
 }
 
@@ -371,7 +362,7 @@ void RoundedFactor::forward(Index s, Index end_column, double* y, double* delta,
   for (Index j0 = 0; j0 < nscol; j0 += kColumns) {
     const Index j1 = std::min(j0 + kColumns, nscol);
     const int width = static_cast<int>(j1 - j0);
-    const float* block = columns(d, j0, j1, thread, true);
+    const float* block = columns(d, j0, j1, thread);
     const std::int64_t origin = packed_column(j0, nsrow);
     const float* c[kColumns];
     for (Index j = j0; j < j1; ++j) {
@@ -406,10 +397,10 @@ void RoundedFactor::backward(Index s, double* y, double* w, int thread) const {
   for (Index i = 0; i < below; ++i) w[nscol + i] = y[d.rows[nscol + i]];
   // Blocks of columns, last first: each column's dot product with every row after the block
   // (four columns in one pass), then the block's own triangle, last column first.
-  for (Index j0 = (nscol - 1) / kColumns * kColumns; j0 >= 0; j0 -= kColumns) {
-    const Index j1 = std::min(j0 + kColumns, nscol);
+  for (Index j1 = nscol, j0 = 0; j1 > 0; j1 = j0) {
+    j0 = (j1 - 1) / kColumns * kColumns;
     const int width = static_cast<int>(j1 - j0);
-    const float* block = columns(d, j0, j1, thread, false);
+    const float* block = columns(d, j0, j1, thread);
     const std::int64_t origin = packed_column(j0, nsrow);
     const float* c[kColumns];
     const float* own[kColumns];

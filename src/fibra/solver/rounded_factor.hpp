@@ -55,11 +55,11 @@ enum class FactorStorage {
 };
 
 /// IEEE binary16 conversions: the processor's (F16C) where the build has it, else in software,
-/// with the same results (round to nearest, ties to even).
+/// with the same results for every value but NaNs (round to nearest, ties to even).
 std::uint16_t float_to_half(float value);
 float half_to_float(std::uint16_t bits);
 /// True when the build converts halves with the processor's instructions (F16C): without them
-/// the substitutions in halves are correct but slower than in floats.
+/// the substitutions in halves are correct but slow.
 bool halves_in_hardware();
 /// The software conversions, whatever the build (tested against the processor's).
 std::uint16_t float_to_half_in_software(float value);
@@ -104,12 +104,11 @@ class RoundedFactor {
   }
   /// The packed values of columns [j0, j1) of a supernode as floats: the stored ones, or the
   /// halves converted into the thread's scratch. Column j starts at the result plus
-  /// packed_column(j, nsrow) - packed_column(j0, nsrow). `onwards`: the substitution goes on to
-  /// higher columns (forward), else to lower ones (back).
-  const float* columns(const Node& d, Index j0, Index j1, int thread, bool onwards) const;
+  /// packed_column(j, nsrow) - packed_column(j0, nsrow).
+  const float* columns(const Node& d, Index j0, Index j1, int thread) const;
   void split_tree();
-  void forward(Index s, Index end_column, double* y, double* delta, double* t, int thread) const;
-  void backward(Index s, double* y, double* t, int thread) const;
+  void forward(Index s, Index end_column, double* y, double* delta, double* w, int thread) const;
+  void backward(Index s, double* y, double* w, int thread) const;
 
   FactorStorage m_storage = FactorStorage::Float;
   Index m_n = 0;

@@ -51,9 +51,7 @@ std::string describe_motion(const Model& model, const VecX& motion, const VecX& 
   }
   // The fiber of the node that moves most, the range of its nodes that move at least half as
   // much, and the other fibers that have such nodes too.
-  int fiber = 0;
-  for (size_t f = 0; f < model.fibers.size(); ++f)
-    if (g >= model.fibers[f].first_node && g < model.fibers[f].first_node + model.fibers[f].num_nodes) fiber = static_cast<int>(f);
+  const int fiber = std::max(0, model.fiber_of_node(g));
   const Fiber& f = model.fibers[fiber];
   Index lo = g, hi = g;
   for (Index n = f.first_node; n < f.first_node + f.num_nodes; ++n)

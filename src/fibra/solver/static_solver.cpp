@@ -327,10 +327,9 @@ double StaticSolver::normal_update_residual() {
         if (!fixed[d]) f2 += std::pow(m_force_scale[d] * m_update_gradient[d], 2);
       if (f2 > worst_f) worst_f = f2, worst = g;
     }
-    for (const Fiber& f : m_model.fibers)
-      if (worst >= f.first_node && worst < f.first_node + f.num_nodes)
-        fmt::print(stderr, " residual with the new normals: largest force on a node {:.3e} N, fiber \"{}\" node {}\n",
-                   std::sqrt(worst_f), f.name, worst - f.first_node);
+    if (const int f = m_model.fiber_of_node(worst); f >= 0)
+      fmt::print(stderr, " residual with the new normals: largest force on a node {:.3e} N, fiber \"{}\" node {}\n",
+                 std::sqrt(worst_f), m_model.fibers[f].name, worst - m_model.fibers[f].first_node);
   }
   return std::sqrt(res) / std::max(settling_reference(), 1e-300);
 }
