@@ -27,6 +27,7 @@
 #include <unordered_map>
 
 #include "bench_common.hpp"
+#include "fibra/solver/cholmod_view.hpp"
 
 namespace {
 
@@ -174,20 +175,7 @@ class Direct {
  private:
   cholmod_sparse wrap() {
     const bench::Bundle& b = bundle();
-    const BlockPattern& p = b.problem->pattern();
-    cholmod_sparse a{};
-    a.nrow = a.ncol = p.rows();
-    a.nzmax = p.nonzeros();
-    a.p = const_cast<int*>(p.col_ptr().data());
-    a.i = const_cast<int*>(p.row_idx().data());
-    a.x = const_cast<double*>(b.hessian.data());
-    a.stype = 1;
-    a.itype = CHOLMOD_INT;
-    a.xtype = CHOLMOD_REAL;
-    a.dtype = CHOLMOD_DOUBLE;
-    a.sorted = 1;
-    a.packed = 1;
-    return a;
+    return cholmod_upper(b.problem->pattern(), b.hessian.data());
   }
   Ordering m_ordering;
   cholmod_common m_c{};

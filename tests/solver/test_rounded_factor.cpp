@@ -14,6 +14,7 @@
 
 #include "fibra/assembly/block_pattern.hpp"
 #include "fibra/solver/linear_solver.hpp"
+#include "fibra/solver/cholmod_view.hpp"
 #include "fibra/solver/rounded_factor.hpp"
 #include "verification/verification_support.hpp"
 
@@ -71,6 +72,46 @@ VecX random_vector(Index n, unsigned seed) {
   for (Index i = 0; i < n; ++i) v[i] = u(gen);
   return v;
 }
+
+// CHOLMOD's supernodal factor of a grid's matrix, read directly (METIS, postordered, as
+// fibra's back end makes it): its values, its view for RoundedFactor, and CHOLMOD's solve.
+struct DirectFactor {
+  cholmod_common common;
+  cholmod_factor* f = nullptr;
+  Index n = 0;
+
+  explicit DirectFactor(Grid& grid) : n(grid.n()) {
+    cholmod_start(&common);
+    common.supernodal = CHOLMOD_SUPERNODAL;
+    common.nmethods = 1;
+    common.method[0].ordering = CHOLMOD_METIS;
+    common.postorder = 1;
+    cholmod_sparse a = cholmod_upper(*grid.pattern, grid.values.data());
+    f = cholmod_analyze(&a, &common);
+    if (f) cholmod_factorize(&a, f, &common);
+  }
+  ~DirectFactor() {
+    if (f) cholmod_free_factor(&f, &common);
+    cholmod_finish(&common);
+  }
+  bool ok() const { return f && f->is_super && common.status == CHOLMOD_OK; }
+  double* values() { return static_cast<double*>(f->x); }
+  Index stored() const { return static_cast<const int*>(f->px)[f->nsuper]; }
+  SupernodalView view() const { return supernodal_view(*f); }
+  VecX solve(const VecX& b) {
+    cholmod_dense rhs{};
+    rhs.nrow = rhs.nzmax = rhs.d = n;
+    rhs.ncol = 1;
+    rhs.x = const_cast<double*>(b.data());
+    rhs.xtype = CHOLMOD_REAL;
+    rhs.dtype = CHOLMOD_DOUBLE;
+    cholmod_dense* sol = cholmod_solve(CHOLMOD_A, f, &rhs, &common);
+    if (!sol) return VecX();
+    const VecX x = Eigen::Map<const VecX>(static_cast<double*>(sol->x), n);
+    cholmod_free_dense(&sol, &common);
+    return x;
+  }
+};
 
 // Solves with a precision; returns precondition(b) and, through `exact`, solve(b).
 VecX precondition_with(const Grid& grid, KrylovPrecision precision, const VecX& b, VecX& exact, bool& single) {
@@ -186,54 +227,13 @@ TEST(RoundedFactor, HalvesAreTheRowScaledFactorRounded) {
       grid.values[k] *= unit[row_idx[k]] * unit[c];
       if (row_idx[k] == c) diagonal[c] = grid.values[k];
     }
-  cholmod_common common;
-  cholmod_start(&common);
-  common.supernodal = CHOLMOD_SUPERNODAL;
-  common.nmethods = 1;
-  common.method[0].ordering = CHOLMOD_METIS;
-  common.postorder = 1;
-  cholmod_sparse a{};
-  a.nrow = a.ncol = n;
-  a.nzmax = grid.pattern->nonzeros();
-  a.p = const_cast<int*>(col_ptr.data());
-  a.i = const_cast<int*>(row_idx.data());
-  a.x = grid.values.data();
-  a.stype = 1;
-  a.itype = CHOLMOD_INT;
-  a.xtype = CHOLMOD_REAL;
-  a.dtype = CHOLMOD_DOUBLE;
-  a.sorted = 1;
-  a.packed = 1;
-  cholmod_factor* f = cholmod_analyze(&a, &common);
-  ASSERT_NE(f, nullptr);
-  ASSERT_TRUE(cholmod_factorize(&a, f, &common));
-  ASSERT_TRUE(f->is_super);
-  SupernodalView v;
-  v.n = n;
-  v.nsuper = static_cast<Index>(f->nsuper);
-  v.super = static_cast<const int*>(f->super);
-  v.pi = static_cast<const int*>(f->pi);
-  v.px = static_cast<const int*>(f->px);
-  v.s_rows = static_cast<const int*>(f->s);
-  v.values = static_cast<const double*>(f->x);
-  v.perm = static_cast<const int*>(f->Perm);
+  DirectFactor factor(grid);
+  ASSERT_TRUE(factor.ok());
+  SupernodalView v = factor.view();
   v.diagonal = diagonal.data();
-  auto solve_with = [&](cholmod_factor* factor, const VecX& b) {
-    cholmod_dense rhs{};
-    rhs.nrow = rhs.nzmax = rhs.d = n;
-    rhs.ncol = 1;
-    rhs.x = const_cast<double*>(b.data());
-    rhs.xtype = CHOLMOD_REAL;
-    rhs.dtype = CHOLMOD_DOUBLE;
-    cholmod_dense* sol = cholmod_solve(CHOLMOD_A, factor, &rhs, &common);
-    EXPECT_NE(sol, nullptr);
-    const VecX x = Eigen::Map<const VecX>(static_cast<double*>(sol->x), n);
-    cholmod_free_dense(&sol, &common);
-    return x;
-  };
   VecX b = random_vector(n, 8);
   for (Index k = 0; k < n; ++k) b[k] *= unit[k];
-  const VecX exact = solve_with(f, b);
+  const VecX exact = factor.solve(b);
   RoundedFactor half, summed;
   half.assign(v, FactorStorage::Half);
   v.diagonal = nullptr;
@@ -248,7 +248,7 @@ TEST(RoundedFactor, HalvesAreTheRowScaledFactorRounded) {
   EXPECT_LT(difference, 1e-2);
   EXPECT_LT((x_summed - x).norm(), 1e-6 * x.norm());
   // The factor rounded in place as the halves are: row r (of P A P^T) scaled by 1 / sqrt(A_rr).
-  double* lx = static_cast<double*>(f->x);
+  double* lx = factor.values();
   for (Index s = 0; s < v.nsuper; ++s) {
     const Index nscol = v.super[s + 1] - v.super[s], nsrow = v.pi[s + 1] - v.pi[s];
     const int* rows = v.s_rows + v.pi[s];
@@ -259,10 +259,8 @@ TEST(RoundedFactor, HalvesAreTheRowScaledFactorRounded) {
         value = static_cast<double>(half_to_float(float_to_half(static_cast<float>(value * scale)))) / scale;
       }
   }
-  const VecX reference = solve_with(f, b);
+  const VecX reference = factor.solve(b);
   EXPECT_LT((x - reference).norm(), 1e-9 * reference.norm());
-  cholmod_free_factor(&f, &common);
-  cholmod_finish(&common);
 }
 
 TEST(RoundedFactor, DoublePrecisionPreconditionsWithTheFactorItself) {
@@ -284,61 +282,29 @@ TEST(RoundedFactor, SameResultOnOneThreadAndTwo) {
   const Grid grid(40);
   const VecX b = random_vector(grid.n(), 5);
   const int previous = omp_get_max_threads();
-  VecX exact, one, two;
-  bool single = false;
-  omp_set_num_threads(1);
-  one = precondition_with(grid, KrylovPrecision::Single, b, exact, single);
-  omp_set_num_threads(2);
-  two = precondition_with(grid, KrylovPrecision::Single, b, exact, single);
+  for (const KrylovPrecision precision : {KrylovPrecision::Single, KrylovPrecision::Half}) {
+    VecX exact, one, two;
+    bool rounded = false;
+    omp_set_num_threads(1);
+    one = precondition_with(grid, precision, b, exact, rounded);
+    omp_set_num_threads(2);
+    two = precondition_with(grid, precision, b, exact, rounded);
+    EXPECT_EQ((one - two).norm(), 0.0);
+  }
   omp_set_num_threads(previous);
-  EXPECT_EQ((one - two).norm(), 0.0);
-  omp_set_num_threads(1);
-  one = precondition_with(grid, KrylovPrecision::Half, b, exact, single);
-  omp_set_num_threads(2);
-  two = precondition_with(grid, KrylovPrecision::Half, b, exact, single);
-  omp_set_num_threads(previous);
-  EXPECT_EQ((one - two).norm(), 0.0);
 }
 
 // The tree's cut, with CHOLMOD's factor read directly: a top and two parts, and the
 // substitutions exact to rounding when the values are exactly representable in floats.
 TEST(RoundedFactor, TreeCutIntoATopAndTwoBalancedParts) {
-  const Grid grid(40);
-  cholmod_common common;
-  cholmod_start(&common);
-  common.supernodal = CHOLMOD_SUPERNODAL;
-  common.nmethods = 1;
-  common.method[0].ordering = CHOLMOD_METIS;
-  common.postorder = 1;
-  cholmod_sparse a{};
-  a.nrow = a.ncol = grid.n();
-  a.nzmax = grid.pattern->nonzeros();
-  a.p = const_cast<int*>(grid.pattern->col_ptr().data());
-  a.i = const_cast<int*>(grid.pattern->row_idx().data());
-  a.x = const_cast<double*>(grid.values.data());
-  a.stype = 1;
-  a.itype = CHOLMOD_INT;
-  a.xtype = CHOLMOD_REAL;
-  a.dtype = CHOLMOD_DOUBLE;
-  a.sorted = 1;
-  a.packed = 1;
-  cholmod_factor* f = cholmod_analyze(&a, &common);
-  ASSERT_NE(f, nullptr);
-  ASSERT_TRUE(cholmod_factorize(&a, f, &common));
-  ASSERT_TRUE(f->is_super);
+  Grid grid(40);
+  DirectFactor factor(grid);
+  ASSERT_TRUE(factor.ok());
   // Round the factor's values to floats in place: the single copy is then exactly this factor.
-  double* lx = static_cast<double*>(f->x);
-  const Index count = static_cast<const int*>(f->px)[f->nsuper];
+  double* lx = factor.values();
+  const Index count = factor.stored();
   for (Index k = 0; k < count; ++k) lx[k] = static_cast<float>(lx[k]);
-  SupernodalView v;
-  v.n = grid.n();
-  v.nsuper = static_cast<Index>(f->nsuper);
-  v.super = static_cast<const int*>(f->super);
-  v.pi = static_cast<const int*>(f->pi);
-  v.px = static_cast<const int*>(f->px);
-  v.s_rows = static_cast<const int*>(f->s);
-  v.values = lx;
-  v.perm = static_cast<const int*>(f->Perm);
+  const SupernodalView v = factor.view();
   RoundedFactor single;
   single.assign(v);
   EXPECT_GT(single.top_share(), 0.0);   // a top, done on one thread
@@ -357,24 +323,13 @@ TEST(RoundedFactor, TreeCutIntoATopAndTwoBalancedParts) {
   VecX x;
   single.solve(b, x);
   // CHOLMOD's own solve with the same (rounded) factor.
-  cholmod_dense rhs{};
-  rhs.nrow = rhs.nzmax = rhs.d = grid.n();
-  rhs.ncol = 1;
-  rhs.x = const_cast<double*>(b.data());
-  rhs.xtype = CHOLMOD_REAL;
-  rhs.dtype = CHOLMOD_DOUBLE;
-  cholmod_dense* sol = cholmod_solve(CHOLMOD_A, f, &rhs, &common);
-  ASSERT_NE(sol, nullptr);
-  const VecX reference = Eigen::Map<const VecX>(static_cast<double*>(sol->x), grid.n());
+  const VecX reference = factor.solve(b);
   EXPECT_LT((x - reference).norm(), 1e-9 * reference.norm());
   // Assigning again (same structure) reuses the cut and gives the same solve.
   single.assign(v);
   VecX again;
   single.solve(b, again);
   EXPECT_EQ((again - x).norm(), 0.0);
-  cholmod_free_dense(&sol, &common);
-  cholmod_free_factor(&f, &common);
-  cholmod_finish(&common);
 }
 
 TEST(RoundedFactor, NewtonReachesTheSameStatesInEitherPrecision) {

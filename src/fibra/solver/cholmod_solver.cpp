@@ -9,6 +9,7 @@
 
 #include "fibra/core/debug.hpp"
 #include "fibra/solver/blas_threads.hpp"
+#include "fibra/solver/cholmod_view.hpp"
 #include "fibra/solver/linear_solver.hpp"
 #include "fibra/solver/rounded_factor.hpp"
 
@@ -48,7 +49,7 @@ class CholmodSolver final : public LinearSolver {
     if (m_pending) {
       if (m_factor) cholmod_free_factor(&m_factor, &m_common);
       m_dummy.assign(m_pattern->nonzeros(), 0.0);
-      cholmod_sparse pattern = wrap(m_dummy);
+      cholmod_sparse pattern = cholmod_upper(*m_pattern, m_dummy.data());
       const auto t0 = std::chrono::steady_clock::now();
       m_factor = cholmod_analyze(&pattern, &m_common);
       if (!m_factor) throw std::runtime_error("CHOLMOD analysis failed");
@@ -59,7 +60,7 @@ class CholmodSolver final : public LinearSolver {
       m_pending = false;
     }
     m_factored = false;
-    cholmod_sparse a = wrap(values);
+    cholmod_sparse a = cholmod_upper(*m_pattern, values.data());
     double beta[2] = {shift, 0.0};
     // CHOLMOD's supernodal factorization opens an OpenMP region per supernode copy (with a
     // team size fixed when CHOLMOD was built): on a small machine with passive waiting that is a
@@ -77,15 +78,7 @@ class CholmodSolver final : public LinearSolver {
     m_rounded_ready = false;
     if (m_precision == KrylovPrecision::Single || m_precision == KrylovPrecision::Half ||
         (m_precision == KrylovPrecision::Auto && m_common.lnz >= kRoundedFactorNonzeros)) {
-      SupernodalView v;
-      v.n = static_cast<Index>(m_factor->n);
-      v.nsuper = static_cast<Index>(m_factor->nsuper);
-      v.super = static_cast<const int*>(m_factor->super);
-      v.pi = static_cast<const int*>(m_factor->pi);
-      v.px = static_cast<const int*>(m_factor->px);
-      v.s_rows = static_cast<const int*>(m_factor->s);
-      v.values = static_cast<const double*>(m_factor->x);
-      v.perm = static_cast<const int*>(m_factor->Perm);
+      SupernodalView v = supernodal_view(*m_factor);
       if (storage() == FactorStorage::Half) {
         // The diagonal: the last stored entry of each column of the upper triangle.
         const Index n = m_pattern->rows();
@@ -178,22 +171,6 @@ class CholmodSolver final : public LinearSolver {
                100.0 * m_rounded.top_share(),
                rounded, std::chrono::duration<double>(t1 - t0).count(),
                (x_double - x_rounded).norm() / x_double.norm());
-  }
-
-  cholmod_sparse wrap(const std::vector<double>& values) {
-    cholmod_sparse a{};
-    a.nrow = a.ncol = m_pattern->rows();
-    a.nzmax = m_pattern->nonzeros();
-    a.p = const_cast<int*>(m_pattern->col_ptr().data());
-    a.i = const_cast<int*>(m_pattern->row_idx().data());
-    a.x = const_cast<double*>(values.data());
-    a.stype = 1;
-    a.itype = CHOLMOD_INT;
-    a.xtype = CHOLMOD_REAL;
-    a.dtype = CHOLMOD_DOUBLE;
-    a.sorted = 1;
-    a.packed = 1;
-    return a;
   }
 
   cholmod_common m_common{};
