@@ -80,15 +80,9 @@ class CholmodSolver final : public LinearSolver {
         (m_precision == KrylovPrecision::Auto && m_common.lnz >= kRoundedFactorNonzeros)) {
       SupernodalView v = supernodal_view(*m_factor);
       if (storage() == FactorStorage::Half) {
-        // The diagonal: the last stored entry of each column of the upper triangle.
         const Index n = m_pattern->rows();
-        const auto& col_ptr = m_pattern->col_ptr();
-        const auto& row_idx = m_pattern->row_idx();
         m_diagonal.assign(n, shift);
-        for (Index c = 0; c < n; ++c) {
-          const Index last = col_ptr[c + 1] - 1;
-          if (last >= col_ptr[c] && row_idx[last] == c) m_diagonal[c] += values[last];
-        }
+        for (Index d = 0; d < n; ++d) m_diagonal[d] += values[m_pattern->find(d, d)];
         v.diagonal = m_diagonal.data();
       }
       m_rounded.assign(v, storage());

@@ -25,41 +25,6 @@ inline void update(const float* const* c, const double* x, double* w, Index n) {
   }
 }
 
-/// s_k = sum_i c_k[i] w[i] over n entries, for W columns c_k (one pass over w).
-template <int W>
-inline void dots(const float* const* c, const double* w, Index n, double* s) {
-  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
-  if constexpr (W == 4) {
-#pragma omp simd reduction(+ : s0, s1, s2, s3)
-    for (Index i = 0; i < n; ++i) {
-      s0 += static_cast<double>(c[0][i]) * w[i];
-      s1 += static_cast<double>(c[1][i]) * w[i];
-      s2 += static_cast<double>(c[2][i]) * w[i];
-      s3 += static_cast<double>(c[3][i]) * w[i];
-    }
-    s[3] = s3;
-  } else if constexpr (W == 3) {
-#pragma omp simd reduction(+ : s0, s1, s2)
-    for (Index i = 0; i < n; ++i) {
-      s0 += static_cast<double>(c[0][i]) * w[i];
-      s1 += static_cast<double>(c[1][i]) * w[i];
-      s2 += static_cast<double>(c[2][i]) * w[i];
-    }
-  } else if constexpr (W == 2) {
-#pragma omp simd reduction(+ : s0, s1)
-    for (Index i = 0; i < n; ++i) {
-      s0 += static_cast<double>(c[0][i]) * w[i];
-      s1 += static_cast<double>(c[1][i]) * w[i];
-    }
-  } else {
-#pragma omp simd reduction(+ : s0)
-    for (Index i = 0; i < n; ++i) s0 += static_cast<double>(c[0][i]) * w[i];
-  }
-  s[0] = s0;
-  if constexpr (W >= 2) s[1] = s1;
-  if constexpr (W >= 3) s[2] = s2;
-}
-
 inline void update(int width, const float* const* c, const double* x, double* w, Index n) {
   switch (width) {
     case 4: return update<4>(c, x, w, n);
@@ -69,12 +34,29 @@ inline void update(int width, const float* const* c, const double* x, double* w,
   }
 }
 
+/// s_k = sum_i c_k[i] w[i] over n entries for `width` columns c_k: four in one pass over w,
+/// fewer one by one.
 inline void dots(int width, const float* const* c, const double* w, Index n, double* s) {
-  switch (width) {
-    case 4: return dots<4>(c, w, n, s);
-    case 3: return dots<3>(c, w, n, s);
-    case 2: return dots<2>(c, w, n, s);
-    default: return dots<1>(c, w, n, s);
+  if (width == 4) {
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+#pragma omp simd reduction(+ : s0, s1, s2, s3)
+    for (Index i = 0; i < n; ++i) {
+      s0 += static_cast<double>(c[0][i]) * w[i];
+      s1 += static_cast<double>(c[1][i]) * w[i];
+      s2 += static_cast<double>(c[2][i]) * w[i];
+      s3 += static_cast<double>(c[3][i]) * w[i];
+    }
+    s[0] = s0;
+    s[1] = s1;
+    s[2] = s2;
+    s[3] = s3;
+    return;
+  }
+  for (int k = 0; k < width; ++k) {
+    double sum = 0.0;
+#pragma omp simd reduction(+ : sum)
+    for (Index i = 0; i < n; ++i) sum += static_cast<double>(c[k][i]) * w[i];
+    s[k] = sum;
   }
 }
 
