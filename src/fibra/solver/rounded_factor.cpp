@@ -14,14 +14,24 @@
 namespace fibra {
 namespace {
 
-/// w[i] -= sum_k c_k[i] x_k over n entries, for W columns c_k (one pass over w).
+/// w[i] -= sum_k c_k[i] x_k over n entries, for W columns c_k (one pass over w). The columns'
+/// pointers and weights are held in locals: read through `c` inside the loop, GCC vectorized
+/// the loads as gathers and kept the sums on the stack.
 template <int W>
 inline void update(const float* const* c, const double* x, double* w, Index n) {
+  const float* __restrict c0 = c[0];
+  const float* __restrict c1 = c[W > 1 ? 1 : 0];
+  const float* __restrict c2 = c[W > 2 ? 2 : 0];
+  const float* __restrict c3 = c[W > 3 ? 3 : 0];
+  const double x0 = x[0], x1 = W > 1 ? x[1] : 0.0, x2 = W > 2 ? x[2] : 0.0, x3 = W > 3 ? x[3] : 0.0;
+  double* __restrict out = w;
 #pragma omp simd
   for (Index i = 0; i < n; ++i) {
-    double sum = 0.0;
-    for (int k = 0; k < W; ++k) sum += static_cast<double>(c[k][i]) * x[k];
-    w[i] -= sum;
+    double sum = static_cast<double>(c0[i]) * x0;
+    if constexpr (W > 1) sum += static_cast<double>(c1[i]) * x1;
+    if constexpr (W > 2) sum += static_cast<double>(c2[i]) * x2;
+    if constexpr (W > 3) sum += static_cast<double>(c3[i]) * x3;
+    out[i] -= sum;
   }
 }
 
@@ -34,17 +44,31 @@ inline void update(int width, const float* const* c, const double* x, double* w,
   }
 }
 
+/// s = sum_i c[i] w[i] over n entries.
+inline double dot(const float* __restrict c, const double* __restrict w, Index n) {
+  double sum = 0.0;
+#pragma omp simd reduction(+ : sum)
+  for (Index i = 0; i < n; ++i) sum += static_cast<double>(c[i]) * w[i];
+  return sum;
+}
+
 /// s_k = sum_i c_k[i] w[i] over n entries for `width` columns c_k: four in one pass over w,
 /// fewer one by one.
 inline void dots(int width, const float* const* c, const double* w, Index n, double* s) {
   if (width == 4) {
+    const float* __restrict c0 = c[0];
+    const float* __restrict c1 = c[1];
+    const float* __restrict c2 = c[2];
+    const float* __restrict c3 = c[3];
+    const double* __restrict v = w;
     double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
 #pragma omp simd reduction(+ : s0, s1, s2, s3)
     for (Index i = 0; i < n; ++i) {
-      s0 += static_cast<double>(c[0][i]) * w[i];
-      s1 += static_cast<double>(c[1][i]) * w[i];
-      s2 += static_cast<double>(c[2][i]) * w[i];
-      s3 += static_cast<double>(c[3][i]) * w[i];
+      const double wi = v[i];
+      s0 += static_cast<double>(c0[i]) * wi;
+      s1 += static_cast<double>(c1[i]) * wi;
+      s2 += static_cast<double>(c2[i]) * wi;
+      s3 += static_cast<double>(c3[i]) * wi;
     }
     s[0] = s0;
     s[1] = s1;
@@ -52,12 +76,7 @@ inline void dots(int width, const float* const* c, const double* w, Index n, dou
     s[3] = s3;
     return;
   }
-  for (int k = 0; k < width; ++k) {
-    double sum = 0.0;
-#pragma omp simd reduction(+ : sum)
-    for (Index i = 0; i < n; ++i) sum += static_cast<double>(c[k][i]) * w[i];
-    s[k] = sum;
-  }
+  for (int k = 0; k < width; ++k) s[k] = dot(c[k], w, n);
 }
 
 // Columns of a supernode converted (or addressed) together: the substitutions' unit of work.
